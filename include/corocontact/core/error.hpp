@@ -1,0 +1,60 @@
+#pragma once
+/// @file error.hpp
+/// @brief Exceptions and checking macros.
+///
+/// Bad input (files, case TOML, meshes, options) throws InputError; the message gives the
+/// input location first (`path:line`, body, element), then the failed condition, then the
+/// source location. Non-finite numbers and degenerate elements throw NumericalError.
+
+#include <sstream>
+#include <stdexcept>
+#include <string>
+
+namespace coro {
+
+/// Bad input: the command line maps it to exit code 2.
+class InputError : public std::runtime_error {
+public:
+    using std::runtime_error::runtime_error;
+};
+
+/// A numerical failure (NaN, Inf, an inverted element): in a time loop it means divergence
+/// and maps to exit code 3.
+class NumericalError : public std::runtime_error {
+public:
+    using std::runtime_error::runtime_error;
+};
+
+namespace detail {
+/// Builds "message (file:line)" for the macros below.
+std::string with_source_location(const std::string& message, const char* file, int line);
+} // namespace detail
+
+} // namespace coro
+
+/// Throws `Err` with a streamed message when `cond` is false; stays on in Release.
+/// Usage: CORO_CHECK(n > 0, InputError, path << ":" << line << ": expected n > 0, got " << n);
+#define CORO_CHECK(cond, Err, msg)                                                           \
+    do {                                                                                     \
+        if (!(cond)) {                                                                       \
+            std::ostringstream coro_check_stream_;                                           \
+            coro_check_stream_ << msg;                                                       \
+            throw ::coro::Err(::coro::detail::with_source_location(coro_check_stream_.str(), \
+                                                                   __FILE__, __LINE__));     \
+        }                                                                                    \
+    } while (false)
+
+/// Throws `Err` with a streamed message unconditionally.
+#define CORO_THROW(Err, msg) CORO_CHECK(false, Err, msg)
+
+/// Programming-error check, compiled only in Debug builds.
+#ifndef NDEBUG
+#define CORO_ASSERT(cond)                                                                      \
+    do {                                                                                       \
+        if (!(cond))                                                                           \
+            throw std::logic_error(::coro::detail::with_source_location(                       \
+                "assertion failed: " #cond, __FILE__, __LINE__));                              \
+    } while (false)
+#else
+#define CORO_ASSERT(cond) ((void)0)
+#endif

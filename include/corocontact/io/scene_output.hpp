@@ -1,0 +1,36 @@
+#pragma once
+/// @file scene_output.hpp
+/// @brief What a frame shows of a scene, and the run summary file.
+
+#include <corocontact/io/vtk_series.hpp>
+#include <corocontact/sim/simulation.hpp>
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+namespace coro {
+
+/// One block per body: current positions in input node order, point data `displacement` and
+/// `velocity` (#V×3), cell data `von_mises` (#T, Pa).
+std::vector<FrameBlock> scene_frame(const Scene& scene);
+
+/// What OUT/NAME.summary.json holds besides the RunSummary.
+struct SummaryContext {
+    std::string name;
+    Index threads = 1;
+    Index bodies = 0;
+    Index tets = 0;
+    double peak_rss_mb = 0.0;
+};
+
+/// The summary as JSON text (keys of DESIGN.md: steps, wall_s, steps_per_s, threads, bodies,
+/// tets, phases{rotation,assembly,solve,contact,output}, cg_iterations_mean, cg_residual_mean,
+/// peak_rss_mb, plus solves, solves_not_converged and static_not_converged).
+std::string summary_json(const RunSummary& summary, const SummaryContext& context);
+
+/// Writes `text` to `path` through a temporary file and a rename.
+/// @throws InputError naming the file if it cannot be written
+void write_file_atomically(const std::filesystem::path& path, const std::string& text);
+
+} // namespace coro

@@ -1,0 +1,72 @@
+#pragma once
+/// @file body.hpp
+/// @brief One deformable body: its mesh, FEM model, state, constraints and loads.
+
+#include <corocontact/core/tet_mesh.hpp>
+#include <corocontact/fem/corotational_fem.hpp>
+#include <corocontact/sim/case_spec.hpp>
+#include <corocontact/solver/bsr_matrix.hpp>
+#include <corocontact/solver/pcg.hpp>
+
+#include <string>
+#include <vector>
+
+namespace coro {
+
+class Body {
+public:
+    /// Builds a body from its mesh (already transformed and oriented) and the case's settings.
+    /// @param[in] mesh  positively oriented tets, positions after the body transform [m]
+    /// @param[in] spec  material, damping, initial velocity, fixed regions and box loads
+    /// @throws InputError naming spec.location if a fixed or load box contains no node
+    Body(TetMesh mesh, const BodySpec& spec);
+
+    const std::string& name() const { return m_name; }
+    const TetMesh& mesh() const { return m_mesh; }
+    CorotationalFem& fem() { return m_fem; }
+    const CorotationalFem& fem() const { return m_fem; }
+    Index num_vertices() const { return m_mesh.num_vertices(); }
+
+    /// Current positions x, #3V [m].
+    VecX& positions() { return m_positions; }
+    const VecX& positions() const { return m_positions; }
+    /// Current velocities v, #3V [m/s].
+    VecX& velocities() { return m_velocities; }
+    const VecX& velocities() const { return m_velocities; }
+    /// Displacements x − X, #3V [m].
+    VecX displacements() const { return m_positions - m_fem.rest_dofs(); }
+
+    /// #V flags, non-zero for a node held in place.
+    const std::vector<char>& fixed() const { return m_fixed; }
+    /// Marks node `v` fixed (it keeps its current position).
+    void fix_vertex(Index v) { m_fixed[static_cast<std::size_t>(v)] = 1; }
+    /// Constant external nodal forces from the box loads, #3V [N] (gravity is added by solvers).
+    const VecX& load_forces() const { return m_load_forces; }
+    VecX& load_forces() { return m_load_forces; }
+
+    double rayleigh_mass() const { return m_rayleigh_mass; }
+    double rayleigh_stiffness() const { return m_rayleigh_stiffness; }
+
+    /// System matrix storage (pattern built once, values refilled by the solvers).
+    BsrMatrix& system_matrix() { return m_system; }
+    /// The body's PCG solver (keeps its work vectors between steps).
+    PcgSolver& pcg() { return m_pcg; }
+
+    /// Zeroes the entries of fixed nodes in a #3V vector (projection).
+    void project_fixed(Eigen::Ref<VecX> dofs) const;
+
+private:
+    std::string m_name;
+    TetMesh m_mesh;
+    CorotationalFem m_fem;
+    VecX m_positions;
+    VecX m_velocities;
+    std::vector<char> m_fixed;
+    VecX m_load_forces;
+    double m_rayleigh_mass = 0.0;
+    double m_rayleigh_stiffness = 0.0;
+    BsrMatrix m_system;
+    PcgSolver m_pcg;
+};
+
+} // namespace coro

@@ -1,0 +1,65 @@
+#include <corocontact/io/scene_loader.hpp>
+
+#include <corocontact/core/error.hpp>
+#include <corocontact/core/primitives.hpp>
+#include <corocontact/io/mesh_readers.hpp>
+
+#include <sstream>
+
+namespace coro {
+
+TetMesh load_body_mesh(const BodySpec& spec, std::vector<std::string>& warnings)
+{
+    const std::string who = spec.location + ": body '" + spec.name + "'";
+    TetMesh mesh;
+    std::string source;
+    try {
+        switch (spec.shape) {
+        case BodyShape::MESH:
+            mesh = read_tet_mesh(spec.mesh);
+            source = spec.mesh.string();
+            break;
+        case BodyShape::BOX:
+            mesh = make_box(spec.box_min, spec.box_max, spec.cells);
+            source = who;
+            break;
+        case BodyShape::SPHERE:
+            mesh = make_sphere(spec.center, spec.radius, spec.resolution);
+            source = who;
+            break;
+        }
+        spec.transform.apply(mesh.rest_positions);
+        const Index reoriented = validate_and_orient(mesh, source);
+        if (reoriented > 0) {
+            std::ostringstream message;
+            message << source << ": " << reoriented << " of " << mesh.num_tets()
+                    << " tets had negative volume and were reoriented";
+            warnings.push_back(message.str());
+        }
+    } catch (const InputError& error) {
+        if (spec.shape == BodyShape::MESH)
+            throw InputError(who + " (mesh " + spec.mesh.string() + "): " + error.what());
+        throw InputError(who + ": " + error.what());
+    }
+    return mesh;
+}
+
+LoadedScene load_scene(const CaseSpec& spec)
+{
+    LoadedScene loaded;
+    for (const BodySpec& body_spec : spec.bodies) {
+        TetMesh mesh = load_body_mesh(body_spec, loaded.warnings);
+        const std::vector<Index> unused = unreferenced_vertices(mesh);
+        Body body(std::move(mesh), body_spec);
+        for (const Index v : unused)
+            body.fix_vertex(v);
+        if (!unused.empty())
+            loaded.warnings.push_back(body_spec.location + ": body '" + body_spec.name + "': " +
+                                      std::to_string(unused.size()) +
+                                      " nodes belong to no tet; they are held fixed");
+        loaded.scene.bodies.push_back(std::move(body));
+    }
+    return loaded;
+}
+
+} // namespace coro

@@ -1,0 +1,75 @@
+#include <corocontact/io/scene_output.hpp>
+
+#include <corocontact/core/error.hpp>
+
+#include <fstream>
+#include <iomanip>
+#include <sstream>
+
+namespace coro {
+
+std::vector<FrameBlock> scene_frame(const Scene& scene)
+{
+    std::vector<FrameBlock> blocks;
+    blocks.reserve(scene.bodies.size());
+    for (const Body& body : scene.bodies) {
+        FrameBlock block;
+        block.name = body.name();
+        block.points = as_positions(body.positions());
+        block.tets = body.mesh().tets;
+        const VecX displacement = body.displacements();
+        block.point_data.push_back({"displacement", as_positions(displacement)});
+        block.point_data.push_back({"velocity", as_positions(body.velocities())});
+        block.cell_data.push_back({"von_mises", body.fem().von_mises_stress(body.positions())});
+        blocks.push_back(std::move(block));
+    }
+    return blocks;
+}
+
+std::string summary_json(const RunSummary& summary, const SummaryContext& context)
+{
+    std::ostringstream out;
+    out << std::setprecision(9);
+    out << "{\n"
+        << "  \"name\": \"" << context.name << "\",\n"
+        << "  \"steps\": " << summary.steps << ",\n"
+        << "  \"wall_s\": " << summary.wall_s << ",\n"
+        << "  \"steps_per_s\": " << summary.steps_per_s << ",\n"
+        << "  \"threads\": " << context.threads << ",\n"
+        << "  \"bodies\": " << context.bodies << ",\n"
+        << "  \"tets\": " << context.tets << ",\n"
+        << "  \"phases\": {\n"
+        << "    \"rotation\": " << summary.phases.rotation << ",\n"
+        << "    \"assembly\": " << summary.phases.assembly << ",\n"
+        << "    \"solve\": " << summary.phases.solve << ",\n"
+        << "    \"contact\": " << summary.phases.contact << ",\n"
+        << "    \"output\": " << summary.phases.output << "\n"
+        << "  },\n"
+        << "  \"cg_iterations_mean\": " << summary.cg_iterations_mean << ",\n"
+        << "  \"cg_residual_mean\": " << summary.cg_residual_mean << ",\n"
+        << "  \"solves\": " << summary.solves << ",\n"
+        << "  \"solves_not_converged\": " << summary.solves_not_converged << ",\n"
+        << "  \"static_not_converged\": " << summary.static_not_converged << ",\n"
+        << "  \"peak_rss_mb\": " << context.peak_rss_mb << "\n"
+        << "}\n";
+    return out.str();
+}
+
+void write_file_atomically(const std::filesystem::path& path, const std::string& text)
+{
+    std::filesystem::path temporary = path;
+    temporary += ".tmp";
+    {
+        std::ofstream file(temporary, std::ios::binary | std::ios::trunc);
+        CORO_CHECK(file.good(), InputError, temporary.string() << ": cannot open for writing");
+        file << text;
+        file.flush();
+        CORO_CHECK(file.good(), InputError, temporary.string() << ": write failed");
+    }
+    std::error_code error;
+    std::filesystem::rename(temporary, path, error);
+    CORO_CHECK(!error, InputError, path.string() << ": cannot rename from " << temporary.string() << ": "
+                                                 << error.message());
+}
+
+} // namespace coro

@@ -1,0 +1,62 @@
+#include <corocontact/sim/body.hpp>
+
+#include <corocontact/core/error.hpp>
+
+namespace coro {
+
+namespace {
+bool inside(const Vec3& p, const Vec3& min, const Vec3& max)
+{
+    return (p.array() >= min.array()).all() && (p.array() <= max.array()).all();
+}
+} // namespace
+
+Body::Body(TetMesh mesh, const BodySpec& spec)
+    : m_name(spec.name), m_mesh(std::move(mesh)), m_fem(m_mesh, spec.material),
+      m_rayleigh_mass(spec.rayleigh_mass), m_rayleigh_stiffness(spec.rayleigh_stiffness)
+{
+    const Index n = m_mesh.num_vertices();
+    m_positions = m_fem.rest_dofs();
+    m_velocities.resize(3 * n);
+    for (Index v = 0; v < n; ++v)
+        m_velocities.segment<3>(3 * v) = spec.velocity;
+    m_fixed.assign(static_cast<std::size_t>(n), 0);
+    m_load_forces = VecX::Zero(3 * n);
+
+    for (std::size_t k = 0; k < spec.fixed.size(); ++k) {
+        Index count = 0;
+        for (Index v = 0; v < n; ++v)
+            if (inside(m_mesh.rest_positions.row(v).transpose(), spec.fixed[k].min, spec.fixed[k].max)) {
+                m_fixed[static_cast<std::size_t>(v)] = 1;
+                ++count;
+            }
+        CORO_CHECK(count > 0, InputError,
+                   spec.location << ": body '" << m_name << "', [[body.fixed]] " << k
+                                 << ": the box holds no node of the body (expected at least one)");
+    }
+    for (std::size_t k = 0; k < spec.loads.size(); ++k) {
+        std::vector<Index> nodes;
+        for (Index v = 0; v < n; ++v)
+            if (inside(m_mesh.rest_positions.row(v).transpose(), spec.loads[k].min, spec.loads[k].max))
+                nodes.push_back(v);
+        CORO_CHECK(!nodes.empty(), InputError,
+                   spec.location << ": body '" << m_name << "', [[body.load]] " << k
+                                 << ": the box holds no node of the body (expected at least one)");
+        const Vec3 share = spec.loads[k].force / static_cast<double>(nodes.size());
+        for (const Index v : nodes)
+            m_load_forces.segment<3>(3 * v) += share;
+    }
+    for (Index v = 0; v < n; ++v)
+        if (m_fixed[static_cast<std::size_t>(v)])
+            m_velocities.segment<3>(3 * v).setZero();
+    m_system = m_fem.make_matrix();
+}
+
+void Body::project_fixed(Eigen::Ref<VecX> dofs) const
+{
+    for (std::size_t v = 0; v < m_fixed.size(); ++v)
+        if (m_fixed[v])
+            dofs.segment<3>(3 * static_cast<Eigen::Index>(v)).setZero();
+}
+
+} // namespace coro

@@ -1,0 +1,113 @@
+#include <corocontact/sim/simulation.hpp>
+
+#include <corocontact/core/error.hpp>
+#include <corocontact/sim/integrator.hpp>
+#include <corocontact/sim/static_solver.hpp>
+
+#include <algorithm>
+#include <chrono>
+#include <string>
+
+namespace coro {
+
+Index Scene::num_tets() const
+{
+    Index n = 0;
+    for (const Body& body : bodies)
+        n += body.mesh().num_tets();
+    return n;
+}
+
+Index Scene::num_vertices() const
+{
+    Index n = 0;
+    for (const Body& body : bodies)
+        n += body.num_vertices();
+    return n;
+}
+
+PcgSettings pcg_settings(const SolverSettings& solver)
+{
+    PcgSettings settings;
+    settings.max_iterations = solver.max_iterations;
+    settings.tolerance = solver.tolerance;
+    settings.preconditioner = solver.preconditioner == Preconditioner::JACOBI
+                                  ? PcgPreconditioner::JACOBI
+                                  : PcgPreconditioner::BLOCK_JACOBI;
+    return settings;
+}
+
+Simulation::Simulation(Scene& scene, const CaseSpec& spec) : m_scene(scene), m_spec(spec) {}
+
+void Simulation::dynamic_step(RunSummary& summary)
+{
+    const PcgSettings settings = pcg_settings(m_spec.solver);
+    for (Body& body : m_scene.bodies) {
+        const PcgResult result = implicit_euler_step(body, m_spec.simulation.dt, m_spec.simulation.gravity,
+                                                     settings, summary.phases);
+        ++summary.solves;
+        summary.cg_iterations_mean += result.iterations;
+        summary.cg_residual_mean += result.residual;
+        summary.solves_not_converged += result.converged ? 0 : 1;
+    }
+}
+
+void Simulation::static_step(Index load_step, RunSummary& summary)
+{
+    const PcgSettings settings = pcg_settings(m_spec.solver);
+    const double factor = static_cast<double>(load_step) / m_spec.simulation.load_steps;
+    for (Body& body : m_scene.bodies) {
+        const StaticResult result =
+            solve_static(body, factor, m_spec.simulation.gravity, settings, m_spec.solver.static_tolerance,
+                         m_spec.solver.static_max_iterations, summary.phases);
+        ++summary.solves;
+        summary.cg_iterations_mean += result.cg_iterations;
+        summary.cg_residual_mean += result.residual;
+        summary.static_not_converged += result.converged ? 0 : 1;
+    }
+}
+
+RunSummary Simulation::run(Index steps, const FrameCallback& on_frame, const ProgressCallback& on_progress)
+{
+    const bool is_static = m_spec.simulation.analysis == Analysis::STATIC;
+    const Index total = is_static ? m_spec.simulation.load_steps : steps;
+    const Index every = is_static ? 1 : m_spec.simulation.output_every;
+    const auto time_of = [&](Index step) {
+        return is_static ? static_cast<double>(step) / total : step * m_spec.simulation.dt;
+    };
+
+    RunSummary summary;
+    const auto start = std::chrono::steady_clock::now();
+    const auto write_frame = [&](Index step) {
+        if (!on_frame)
+            return;
+        ScopedTimer timer(summary.phases.output);
+        on_frame(step, time_of(step));
+    };
+
+    write_frame(0);
+    for (Index step = 1; step <= total; ++step) {
+        try {
+            if (is_static)
+                static_step(step, summary);
+            else
+                dynamic_step(summary);
+        } catch (const NumericalError& error) {
+            CORO_THROW(NumericalError, "step " << step << " (t = " << time_of(step) << "): " << error.what());
+        }
+        summary.steps = step;
+        if (step % every == 0 || step == total)
+            write_frame(step);
+        if (on_progress)
+            on_progress(step, total);
+    }
+    summary.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    summary.steps_per_s = summary.wall_s > 0.0 ? summary.steps / summary.wall_s : 0.0;
+    if (summary.solves > 0) {
+        summary.cg_iterations_mean /= summary.solves;
+        summary.cg_residual_mean /= summary.solves;
+    }
+    return summary;
+}
+
+} // namespace coro

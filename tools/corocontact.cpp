@@ -1,0 +1,178 @@
+// The corocontact command: run a case, describe a mesh.
+// Exit codes: 0 success, 2 bad input, 3 the simulation diverged.
+
+#include "progress.hpp"
+
+#include <corocontact/config.hpp>
+#include <corocontact/core/error.hpp>
+#include <corocontact/core/surface_mesh.hpp>
+#include <corocontact/io/case_reader.hpp>
+#include <corocontact/io/mesh_readers.hpp>
+#include <corocontact/io/scene_loader.hpp>
+#include <corocontact/io/scene_output.hpp>
+#include <corocontact/io/vtk_series.hpp>
+
+#include <CLI/CLI.hpp>
+#include <tbb/global_control.h>
+#include <tbb/info.h>
+
+#include <sys/resource.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <iostream>
+#include <memory>
+
+namespace {
+
+constexpr int EXIT_BAD_INPUT = 2;
+constexpr int EXIT_DIVERGED = 3;
+
+double peak_rss_mb()
+{
+    rusage usage{};
+    getrusage(RUSAGE_SELF, &usage);
+    return static_cast<double>(usage.ru_maxrss) / 1024.0; // ru_maxrss is in KiB on Linux
+}
+
+struct RunOptions {
+    std::string case_file;
+    std::string out;
+    int threads = 0;
+    long steps = 0;
+    bool quiet = false;
+};
+
+int run_case(const RunOptions& options)
+{
+    coro::CaseSpec spec = coro::read_case(options.case_file);
+    if (!options.out.empty())
+        spec.simulation.output_dir = options.out;
+    if (options.steps > 0)
+        spec.simulation.steps = static_cast<coro::Index>(options.steps);
+
+    // Everything is loaded and checked before the output directory is touched.
+    coro::LoadedScene loaded = coro::load_scene(spec);
+    for (const std::string& warning : loaded.warnings)
+        std::cerr << "warning: " << warning << "\n";
+    coro::Scene& scene = loaded.scene;
+
+    const auto threads = static_cast<coro::Index>(
+        tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism));
+    if (!options.quiet)
+        std::cerr << "corocontact " << CORO_VERSION << ": " << spec.simulation.name << ", "
+                  << scene.bodies.size() << " bodies, " << scene.num_tets() << " tets, "
+                  << scene.num_vertices() << " nodes, " << threads << " threads\n";
+
+    coro::VtkSeriesWriter writer(spec.simulation.output_dir, spec.simulation.name);
+    coro::Simulation simulation(scene, spec);
+    coro::cli::Progress progress(!options.quiet, isatty(STDERR_FILENO) != 0);
+    const coro::RunSummary summary = simulation.run(
+        spec.simulation.steps,
+        [&](coro::Index step, double time) { writer.write_frame(step, time, coro::scene_frame(scene)); },
+        [&](coro::Index done, coro::Index total) { progress.update(done, total); });
+
+    coro::SummaryContext context;
+    context.name = spec.simulation.name;
+    context.threads = threads;
+    context.bodies = static_cast<coro::Index>(scene.bodies.size());
+    context.tets = scene.num_tets();
+    context.peak_rss_mb = peak_rss_mb();
+    const auto summary_path = spec.simulation.output_dir / (spec.simulation.name + ".summary.json");
+    coro::write_file_atomically(summary_path, coro::summary_json(summary, context));
+
+    const auto& p = summary.phases;
+    const double total = std::max(p.total(), 1e-300);
+    std::printf("%s: %d steps in %.3f s, %.2f steps/s, %d threads\n", spec.simulation.name.c_str(),
+                static_cast<int>(summary.steps), summary.wall_s, summary.steps_per_s, static_cast<int>(threads));
+    std::printf("  phases [s]: rotation %.3f (%.0f%%), assembly %.3f (%.0f%%), solve %.3f (%.0f%%), "
+                "contact %.3f (%.0f%%), output %.3f (%.0f%%)\n",
+                p.rotation, 100 * p.rotation / total, p.assembly, 100 * p.assembly / total, p.solve,
+                100 * p.solve / total, p.contact, 100 * p.contact / total, p.output, 100 * p.output / total);
+    std::printf("  PCG: %.1f iterations per solve, mean relative residual %.2e, %d of %d solves at the cap\n",
+                summary.cg_iterations_mean, summary.cg_residual_mean, static_cast<int>(summary.solves_not_converged),
+                static_cast<int>(summary.solves));
+    if (summary.static_not_converged > 0)
+        std::printf("  warning: %d static load steps did not reach static_tolerance\n",
+                    static_cast<int>(summary.static_not_converged));
+    std::printf("  peak memory %.1f MB\n  series: %s\n  summary: %s\n", context.peak_rss_mb,
+                writer.pvd_path().string().c_str(), summary_path.string().c_str());
+    return 0;
+}
+
+int describe_mesh(const std::string& path)
+{
+    coro::TetMesh mesh = coro::read_tet_mesh(path);
+    const coro::Index reoriented = coro::validate_and_orient(mesh, path);
+    const coro::Tris faces = coro::boundary_faces(mesh);
+    const coro::SurfaceCheck check = coro::check_surface(faces);
+    double q_min = 1.0, q_sum = 0.0;
+    for (coro::Index t = 0; t < mesh.num_tets(); ++t) {
+        const double q = coro::mean_ratio_quality(mesh, t);
+        q_min = std::min(q_min, q);
+        q_sum += q;
+    }
+    const Eigen::RowVector3d lo = mesh.rest_positions.colwise().minCoeff();
+    const Eigen::RowVector3d hi = mesh.rest_positions.colwise().maxCoeff();
+    std::printf("%s\n", path.c_str());
+    std::printf("  nodes %d, tets %d, boundary faces %d, boundary nodes %zu\n", mesh.num_vertices(),
+                mesh.num_tets(), static_cast<int>(faces.rows()), coro::surface_vertices(faces).size());
+    std::printf("  volume %.9g, bounding box [%g, %g, %g] - [%g, %g, %g]\n", coro::total_volume(mesh),
+                lo[0], lo[1], lo[2], hi[0], hi[1], hi[2]);
+    std::printf("  quality (mean ratio, 1 = regular): min %.4f, mean %.4f\n", q_min, q_sum / mesh.num_tets());
+    std::printf("  reoriented tets %d, nodes in no tet %zu\n", reoriented, coro::unreferenced_vertices(mesh).size());
+    std::printf("  surface %s (open edges %d, non-manifold edges %d, misoriented edges %d)\n",
+                check.closed_and_oriented() ? "closed and oriented" : "NOT closed and oriented",
+                check.open_edges, check.nonmanifold_edges, check.misoriented_edges);
+    return 0;
+}
+
+} // namespace
+
+int main(int argc, char** argv)
+{
+    CLI::App app{"corocontact: co-rotational FEM bodies in contact"};
+    app.set_version_flag("--version", std::string("corocontact ") + CORO_VERSION);
+    app.require_subcommand(1);
+    int threads = 0;
+    app.add_option("--threads", threads, "worker threads (default: all cores)")->check(CLI::PositiveNumber);
+
+    RunOptions run;
+    CLI::App* run_command = app.add_subcommand("run", "simulate a case into a VTK series");
+    run_command->add_option("case", run.case_file, "case file (.toml)")->required();
+    run_command->add_option("--out", run.out, "output directory (overrides simulation.output_dir)");
+    run_command->add_option("--threads", threads, "worker threads (default: all cores)")->check(CLI::PositiveNumber);
+    run_command->add_option("--steps", run.steps, "number of time steps (overrides simulation.steps)")
+        ->check(CLI::PositiveNumber);
+    run_command->add_flag("--quiet", run.quiet, "no progress output");
+    run_command->set_version_flag("--version", std::string("corocontact ") + CORO_VERSION);
+
+    std::string mesh_path;
+    CLI::App* info_command = app.add_subcommand("info", "counts, volume, quality and surface check of a mesh");
+    info_command->add_option("mesh", mesh_path, "tet mesh file")->required();
+    info_command->set_version_flag("--version", std::string("corocontact ") + CORO_VERSION);
+
+    try {
+        app.parse(argc, argv);
+    } catch (const CLI::ParseError& error) {
+        const int code = app.exit(error);
+        return code == 0 ? 0 : EXIT_BAD_INPUT;
+    }
+
+    std::unique_ptr<tbb::global_control> thread_limit;
+    if (threads > 0)
+        thread_limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,
+                                                             static_cast<std::size_t>(threads));
+    try {
+        if (run_command->parsed())
+            return run_case(run);
+        return describe_mesh(mesh_path);
+    } catch (const coro::InputError& error) {
+        std::cerr << "error: " << error.what() << "\n";
+        return EXIT_BAD_INPUT;
+    } catch (const coro::NumericalError& error) {
+        std::cerr << "error: the simulation diverged: " << error.what() << "\n";
+        return EXIT_DIVERGED;
+    }
+}
