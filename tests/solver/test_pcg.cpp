@@ -1,0 +1,86 @@
+#include "mesh_fixtures.hpp"
+#include "near.hpp"
+
+#include <corocontact/fem/corotational_fem.hpp>
+#include <corocontact/solver/pcg.hpp>
+
+#include <Eigen/SparseCholesky>
+#include <gtest/gtest.h>
+
+using namespace coro;
+
+namespace {
+// An SPD system from a real mesh: mass + stiffness.
+BsrMatrix fem_system(Index cells)
+{
+    const TetMesh mesh = test::irregular_box(cells, 0.2, 12);
+    Material material;
+    material.young = 1e4;
+    CorotationalFem fem(mesh, material);
+    BsrMatrix a = fem.make_matrix();
+    fem.assemble(1e-3, 1.0, {}, a);
+    return a;
+}
+} // namespace
+
+class PcgPreconditioners : public ::testing::TestWithParam<PcgPreconditioner> {};
+
+TEST_P(PcgPreconditioners, SolvesToToleranceAgainstDirectSolve)
+{
+    const BsrMatrix a = fem_system(4);
+    const VecX b = VecX::LinSpaced(a.num_dofs(), -1.0, 2.0);
+    VecX x = VecX::Zero(a.num_dofs());
+    PcgSolver solver;
+    PcgSettings settings;
+    settings.tolerance = 1e-10;
+    settings.max_iterations = 1000;
+    settings.preconditioner = GetParam();
+    const PcgResult result = solver.solve(a, b, x, settings);
+    EXPECT_TRUE(result.converged);
+    EXPECT_LE(result.residual, 1e-10);
+    const SparseMat sparse = a.to_sparse();
+    const VecX direct = Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>>(sparse).solve(b);
+    EXPECT_NEAR_REL(x, direct, 1e-8 * direct.cwiseAbs().maxCoeff(), 0.0);
+    // The reported residual is the true one.
+    EXPECT_NEAR((b - sparse * x).norm() / b.norm(), result.residual, 1e-12);
+}
+
+INSTANTIATE_TEST_SUITE_P(Kinds, PcgPreconditioners,
+                         ::testing::Values(PcgPreconditioner::JACOBI, PcgPreconditioner::BLOCK_JACOBI));
+
+TEST(PcgSolver, StopsAtIterationCapAndReportsIt)
+{
+    const BsrMatrix a = fem_system(4);
+    const VecX b = VecX::Ones(a.num_dofs());
+    VecX x = VecX::Zero(a.num_dofs());
+    PcgSettings settings;
+    settings.max_iterations = 3;
+    settings.tolerance = 1e-14;
+    const PcgResult result = PcgSolver().solve(a, b, x, settings);
+    EXPECT_FALSE(result.converged);
+    EXPECT_EQ(result.iterations, 3);
+    EXPECT_GT(result.residual, 1e-14);
+}
+
+TEST(PcgSolver, WarmStartFromSolutionTakesNoIteration)
+{
+    const BsrMatrix a = fem_system(3);
+    const VecX expected = VecX::LinSpaced(a.num_dofs(), 0.0, 1.0);
+    VecX b(a.num_dofs());
+    a.multiply(expected, b);
+    VecX x = expected;
+    PcgSettings settings;
+    settings.tolerance = 1e-8;
+    const PcgResult result = PcgSolver().solve(a, b, x, settings);
+    EXPECT_TRUE(result.converged);
+    EXPECT_EQ(result.iterations, 0);
+}
+
+TEST(PcgSolver, ZeroRightHandSideGivesZero)
+{
+    const BsrMatrix a = fem_system(2);
+    VecX x = VecX::Ones(a.num_dofs());
+    const PcgResult result = PcgSolver().solve(a, VecX::Zero(a.num_dofs()), x, PcgSettings{});
+    EXPECT_TRUE(result.converged);
+    EXPECT_EQ(x.norm(), 0.0);
+}
