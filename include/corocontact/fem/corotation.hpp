@@ -19,10 +19,11 @@ Mat3 deformation_gradient(const Vec3& x0, const Vec3& x1, const Vec3& x2, const 
 /// @throws NumericalError if F has a non-finite entry
 Mat3 polar_rotation_svd(const Mat3& f);
 
-/// The same rotation found iteratively from a nearby rotation (Müller et al., "A robust method
-/// to extract the rotational part of deformations", MIG 2016), which converges in one to three
-/// iterations when `guess` is last step's rotation. Falls back to the SVD when the iteration
-/// does not reach `tolerance` (angle of the last update [rad]) within 30 iterations.
+/// The same rotation found iteratively from a nearby rotation: R = guess · polar(guessᵀ F),
+/// the inner polar factor by Newton's iteration X ← (X + X⁻ᵀ)/2, which converges
+/// quadratically (two to four iterations when `guess` is last step's rotation). Falls back to
+/// the SVD for inverted or nearly singular guessᵀF, or when the iteration does not reach
+/// `tolerance` (Frobenius norm of the last update) within 30 iterations.
 /// @throws NumericalError if F has a non-finite entry
 Mat3 polar_rotation(const Mat3& f, const Mat3& guess, double tolerance = 1e-13);
 

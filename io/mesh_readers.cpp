@@ -1,0 +1,680 @@
+#include <corocontact/io/mesh_readers.hpp>
+
+#include <corocontact/core/error.hpp>
+
+#include <algorithm>
+#include <array>
+#include <cctype>
+#include <cerrno>
+#include <charconv>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <cstring>
+#include <limits>
+#include <memory>
+#include <sstream>
+#include <string>
+#include <string_view>
+#include <system_error>
+#include <unordered_map>
+#include <utility>
+#include <vector>
+
+namespace coro {
+namespace {
+
+/// Upper bound on what a header count may pre-allocate: counts are input, so a corrupt
+/// header must not be able to request gigabytes; beyond this, containers grow as they read.
+constexpr std::size_t RESERVE_CAP = std::size_t{1} << 16;
+
+/// Gmsh element type of the 4-node tetrahedron; every other type is skipped.
+constexpr int MSH_TET4 = 4;
+
+/// A token or line as it appears in a message: quoted, cut after a few dozen characters.
+std::string in_quotes(std::string_view text)
+{
+    constexpr std::size_t MAX_SHOWN = 40;
+    if (text.size() <= MAX_SHOWN)
+        return "'" + std::string(text) + "'";
+    return "'" + std::string(text.substr(0, MAX_SHOWN)) + "...'";
+}
+
+bool is_blank(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\v' || c == '\f'; }
+
+std::string_view trimmed(std::string_view s)
+{
+    while (!s.empty() && is_blank(s.front()))
+        s.remove_prefix(1);
+    while (!s.empty() && is_blank(s.back()))
+        s.remove_suffix(1);
+    return s;
+}
+
+/// Reads the whole file; the checks name the file and say what is wrong with it.
+std::string read_file(const std::filesystem::path& path)
+{
+    std::error_code ec;
+    const auto status = std::filesystem::status(path, ec);
+    CORO_CHECK(!ec || ec == std::errc::no_such_file_or_directory, InputError,
+               path.string() << ": cannot access the mesh file: " << ec.message());
+    CORO_CHECK(std::filesystem::exists(status), InputError,
+               path.string() << ": mesh file does not exist");
+    CORO_CHECK(!std::filesystem::is_directory(status), InputError,
+               path.string() << ": is a directory, expected a mesh file");
+    const std::unique_ptr<std::FILE, int (*)(std::FILE*)> file(std::fopen(path.c_str(), "rb"),
+                                                               &std::fclose);
+    CORO_CHECK(file != nullptr, InputError,
+               path.string() << ": cannot open the mesh file: " << std::strerror(errno));
+    std::string text;
+    std::array<char, 1 << 16> buffer{};
+    std::size_t n = 0;
+    while ((n = std::fread(buffer.data(), 1, buffer.size(), file.get())) > 0)
+        text.append(buffer.data(), n);
+    CORO_CHECK(!std::ferror(file.get()), InputError,
+               path.string() << ": read error in the mesh file: " << std::strerror(errno));
+    return text;
+}
+
+/// The non-blank lines of a text, trimmed, with their 1-based line numbers.
+class LineCursor {
+public:
+    LineCursor(std::string path, std::string_view text) : m_path(std::move(path)), m_text(text) {}
+
+    /// Advances to the next non-blank line; false at the end of the text.
+    bool next(std::string_view& line)
+    {
+        while (m_pos < m_text.size()) {
+            const std::size_t end = std::min(m_text.find('\n', m_pos), m_text.size());
+            line = trimmed(m_text.substr(m_pos, end - m_pos));
+            m_pos = end + 1;
+            ++m_line;
+            if (!line.empty())
+                return true;
+        }
+        return false;
+    }
+
+    /// "path:line" of the line last returned (at the end of the text: of the last line).
+    std::string where() const { return m_path + ":" + std::to_string(std::max(m_line, 1L)); }
+
+    /// Number of the line last returned.
+    long line() const { return m_line; }
+
+private:
+    std::string m_path;
+    std::string_view m_text;
+    std::size_t m_pos = 0;
+    long m_line = 0;
+};
+
+/// Returns the next line, which must hold data (not a `$Section` line, not the end of file).
+/// `what` streams a description of the expected data into the message; it is only called
+/// on failure.
+template <class Describe>
+std::string_view next_data_line(LineCursor& cursor, const Describe& what)
+{
+    std::string_view line;
+    if (!cursor.next(line)) {
+        std::ostringstream expected;
+        what(expected);
+        CORO_THROW(InputError, cursor.where()
+                                   << ": expected " << expected.str() << ", found end of file");
+    }
+    if (line.front() == '$') {
+        std::ostringstream expected;
+        what(expected);
+        CORO_THROW(InputError, cursor.where() << ": expected " << expected.str() << ", found "
+                                              << in_quotes(line));
+    }
+    return line;
+}
+
+/// Requires the next line to be exactly `marker` (e.g. `$EndNodes`).
+void expect_marker(LineCursor& cursor, std::string_view marker, std::string_view after)
+{
+    std::string_view line;
+    const bool found = cursor.next(line);
+    CORO_CHECK(found, InputError,
+               cursor.where() << ": expected " << marker << " after " << after
+                              << ", found end of file");
+    CORO_CHECK(line == marker, InputError,
+               cursor.where() << ": expected " << marker << " after " << after << ", found "
+                              << in_quotes(line));
+}
+
+/// Whitespace-separated tokens of one line, parsed with std::from_chars.
+class Tokens {
+public:
+    Tokens(std::string_view line, const LineCursor& cursor) : m_rest(line), m_cursor(cursor) {}
+
+    /// Number of tokens not yet consumed.
+    std::size_t remaining() const
+    {
+        std::size_t count = 0;
+        bool in_token = false;
+        for (const char c : m_rest) {
+            const bool blank = is_blank(c);
+            if (!blank && !in_token)
+                ++count;
+            in_token = !blank;
+        }
+        return count;
+    }
+
+    std::string_view next(std::string_view what)
+    {
+        skip_blanks();
+        CORO_CHECK(!m_rest.empty(), InputError,
+                   m_cursor.where() << ": expected " << what << ", found end of line");
+        std::size_t n = 0;
+        while (n < m_rest.size() && !is_blank(m_rest[n]))
+            ++n;
+        const std::string_view token = m_rest.substr(0, n);
+        m_rest.remove_prefix(n);
+        return token;
+    }
+
+    /// A non-negative integer (tags, counts).
+    std::uint64_t next_count(std::string_view what)
+    {
+        return parse_integer<std::uint64_t>(next(what), what, "a non-negative integer");
+    }
+
+    int next_int(std::string_view what)
+    {
+        return parse_integer<int>(next(what), what, "an integer");
+    }
+
+    double next_double(std::string_view what)
+    {
+        std::string_view token = next(what);
+        const std::string_view shown = token;
+        if (token.size() > 1 && token.front() == '+' && token[1] != '-')
+            token.remove_prefix(1); // from_chars rejects the '+' that printf-style writers emit
+        double value = 0.0;
+        const auto [end, ec] = std::from_chars(token.data(), token.data() + token.size(), value);
+        CORO_CHECK(ec != std::errc::result_out_of_range, InputError,
+                   m_cursor.where() << ": expected " << what << ", found " << in_quotes(shown)
+                                    << " (out of the range of double)");
+        CORO_CHECK(ec == std::errc() && end == token.data() + token.size() && std::isfinite(value),
+                   InputError,
+                   m_cursor.where() << ": expected " << what << " (a finite number), found "
+                                    << in_quotes(shown));
+        return value;
+    }
+
+    /// Requires that every token was consumed.
+    void expect_end(std::string_view what)
+    {
+        skip_blanks();
+        CORO_CHECK(m_rest.empty(), InputError,
+                   m_cursor.where() << ": expected end of line after " << what << ", found "
+                                    << in_quotes(m_rest));
+    }
+
+private:
+    void skip_blanks()
+    {
+        while (!m_rest.empty() && is_blank(m_rest.front()))
+            m_rest.remove_prefix(1);
+    }
+
+    template <class T>
+    T parse_integer(std::string_view token, std::string_view what, std::string_view kind) const
+    {
+        T value{};
+        const auto [end, ec] = std::from_chars(token.data(), token.data() + token.size(), value);
+        CORO_CHECK(ec != std::errc::result_out_of_range, InputError,
+                   m_cursor.where() << ": expected " << what << ", found " << in_quotes(token)
+                                    << " (too large)");
+        CORO_CHECK(ec == std::errc() && end == token.data() + token.size(), InputError,
+                   m_cursor.where() << ": expected " << what << " (" << kind << "), found "
+                                    << in_quotes(token));
+        return value;
+    }
+
+    std::string_view m_rest;
+    const LineCursor& m_cursor;
+};
+
+enum class MshVersion { V22, V41 };
+
+/// Nodes and tets as they are read, with node tags mapped to 0-based indices in file order.
+class MshBuilder {
+public:
+    void add_node_tag(const LineCursor& cursor, std::uint64_t tag)
+    {
+        const auto index = m_node_lines.size();
+        CORO_CHECK(index < static_cast<std::size_t>(std::numeric_limits<Index>::max()), InputError,
+                   cursor.where() << ": too many nodes for a 32-bit index");
+        const auto [it, inserted] = m_index_of_tag.emplace(tag, static_cast<Index>(index));
+        CORO_CHECK(inserted, InputError,
+                   cursor.where() << ": duplicate node tag " << tag << " (first defined at line "
+                                  << m_node_lines[static_cast<std::size_t>(it->second)] << ")");
+        m_node_lines.push_back(cursor.line());
+    }
+
+    /// Appends the coordinates of the next node; `add_node_tag` must have been called first.
+    void add_node_coordinates(const std::array<double, 3>& x)
+    {
+        m_positions.insert(m_positions.end(), x.begin(), x.end());
+    }
+
+    void reserve_nodes(std::uint64_t count)
+    {
+        const auto n = static_cast<std::size_t>(std::min<std::uint64_t>(count, RESERVE_CAP));
+        m_node_lines.reserve(m_node_lines.size() + n);
+        m_positions.reserve(m_positions.size() + 3 * n);
+        m_index_of_tag.reserve(m_index_of_tag.size() + n);
+    }
+
+    void reserve_elements(std::uint64_t count)
+    {
+        const auto n = static_cast<std::size_t>(std::min<std::uint64_t>(count, RESERVE_CAP));
+        m_tets.reserve(m_tets.size() + 4 * n);
+    }
+
+    /// Appends a tet given by node tags, mapping them to indices.
+    void add_tet(const LineCursor& cursor, std::uint64_t element_tag,
+                 const std::array<std::uint64_t, 4>& node_tags)
+    {
+        CORO_CHECK(m_tets.size() / 4 < static_cast<std::size_t>(std::numeric_limits<Index>::max()),
+                   InputError, cursor.where() << ": too many tets for a 32-bit index");
+        for (const std::uint64_t tag : node_tags) {
+            const auto it = m_index_of_tag.find(tag);
+            CORO_CHECK(it != m_index_of_tag.end(), InputError,
+                       cursor.where() << ": tet element " << element_tag
+                                      << " references unknown node tag " << tag);
+            m_tets.push_back(it->second);
+        }
+    }
+
+    TetMesh finish() const
+    {
+        TetMesh mesh;
+        const auto n_nodes = static_cast<Eigen::Index>(m_node_lines.size());
+        const auto n_tets = static_cast<Eigen::Index>(m_tets.size() / 4);
+        mesh.rest_positions = Eigen::Map<const Positions>(m_positions.data(), n_nodes, 3);
+        mesh.tets = Eigen::Map<const Tets>(m_tets.data(), n_tets, 4);
+        return mesh;
+    }
+
+private:
+    std::vector<double> m_positions; // 3 per node, in file order
+    std::vector<long> m_node_lines;  // line of each node's tag, for duplicate messages
+    std::unordered_map<std::uint64_t, Index> m_index_of_tag;
+    std::vector<Index> m_tets; // 4 per tet
+};
+
+std::array<double, 3> read_xyz(Tokens& tokens)
+{
+    return {tokens.next_double("node x coordinate"), tokens.next_double("node y coordinate"),
+            tokens.next_double("node z coordinate")};
+}
+
+/// Reads the line after `$MeshFormat` up to `$EndMeshFormat`.
+MshVersion read_mesh_format(LineCursor& cursor)
+{
+    const std::string_view line =
+        next_data_line(cursor, [](std::ostream& os) { os << "'version file-type data-size'"; });
+    Tokens tokens(line, cursor);
+    const std::string_view version = tokens.next("MSH version");
+    CORO_CHECK(version == "2.2" || version == "4.1", InputError,
+               cursor.where() << ": unsupported MSH version " << in_quotes(version)
+                              << ", expected 2.2 or 4.1 (save from Gmsh with -format msh41 or "
+                                 "msh22)");
+    const MshVersion result = version == "2.2" ? MshVersion::V22 : MshVersion::V41;
+    const int file_type = tokens.next_int("file-type (0 for ASCII)");
+    CORO_CHECK(file_type != 1, InputError,
+               cursor.where() << ": binary MSH (file-type 1) is not supported yet, expected ASCII "
+                                 "(file-type 0); save the mesh from Gmsh without -bin");
+    CORO_CHECK(file_type == 0, InputError,
+               cursor.where() << ": expected file-type 0 (ASCII), found " << file_type);
+    tokens.next_int("data-size");
+    tokens.expect_end("'version file-type data-size'");
+    expect_marker(cursor, "$EndMeshFormat", "the format line");
+    return result;
+}
+
+/// MSH 2.2 `$Nodes`: a count, then `tag x y z` lines.
+void read_nodes_v22(LineCursor& cursor, MshBuilder& builder)
+{
+    Tokens header(next_data_line(cursor, [](std::ostream& os) { os << "the number of nodes"; }),
+                  cursor);
+    const long header_line = cursor.line();
+    const std::uint64_t count = header.next_count("the number of nodes");
+    header.expect_end("the number of nodes");
+    builder.reserve_nodes(count);
+    for (std::uint64_t i = 0; i < count; ++i) {
+        Tokens tokens(next_data_line(cursor,
+                                     [&](std::ostream& os) {
+                                         os << "node " << i + 1 << " of " << count
+                                            << " declared at line " << header_line
+                                            << " ('tag x y z')";
+                                     }),
+                      cursor);
+        builder.add_node_tag(cursor, tokens.next_count("node tag"));
+        builder.add_node_coordinates(read_xyz(tokens));
+        tokens.expect_end("'tag x y z'");
+    }
+    expect_marker(cursor, "$EndNodes",
+                  "the " + std::to_string(count) + " nodes declared at line " +
+                      std::to_string(header_line));
+}
+
+/// MSH 4.1 `$Nodes`: entity blocks, each with its node tags followed by its coordinates.
+void read_nodes_v41(LineCursor& cursor, MshBuilder& builder)
+{
+    Tokens header(next_data_line(cursor,
+                                 [](std::ostream& os) {
+                                     os << "'numEntityBlocks numNodes minNodeTag maxNodeTag'";
+                                 }),
+                  cursor);
+    const long header_line = cursor.line();
+    const std::uint64_t n_blocks = header.next_count("the number of node entity blocks");
+    const std::uint64_t n_nodes = header.next_count("the number of nodes");
+    header.next_count("the minimum node tag");
+    header.next_count("the maximum node tag");
+    header.expect_end("'numEntityBlocks numNodes minNodeTag maxNodeTag'");
+    builder.reserve_nodes(n_nodes);
+
+    std::uint64_t n_read = 0;
+    for (std::uint64_t b = 0; b < n_blocks; ++b) {
+        Tokens block(next_data_line(cursor,
+                                    [&](std::ostream& os) {
+                                        os << "node entity block " << b + 1 << " of " << n_blocks
+                                           << " declared at line " << header_line
+                                           << " ('entityDim entityTag parametric numNodesInBlock')";
+                                    }),
+                     cursor);
+        const int dim = block.next_int("entity dimension");
+        CORO_CHECK(dim >= 0 && dim <= 3, InputError,
+                   cursor.where() << ": expected entity dimension 0 to 3, found " << dim);
+        block.next_int("entity tag");
+        const int parametric = block.next_int("parametric flag");
+        CORO_CHECK(parametric == 0 || parametric == 1, InputError,
+                   cursor.where() << ": expected parametric flag 0 or 1, found " << parametric);
+        const std::uint64_t in_block = block.next_count("the number of nodes in the block");
+        block.expect_end("'entityDim entityTag parametric numNodesInBlock'");
+        const long block_line = cursor.line();
+
+        for (std::uint64_t i = 0; i < in_block; ++i) {
+            Tokens tokens(next_data_line(cursor,
+                                         [&](std::ostream& os) {
+                                             os << "node tag " << i + 1 << " of " << in_block
+                                                << " in the block at line " << block_line;
+                                         }),
+                          cursor);
+            builder.add_node_tag(cursor, tokens.next_count("node tag"));
+            tokens.expect_end("the node tag (one per line)");
+        }
+        const int n_parametric = parametric == 1 ? dim : 0;
+        for (std::uint64_t i = 0; i < in_block; ++i) {
+            Tokens tokens(next_data_line(cursor,
+                                         [&](std::ostream& os) {
+                                             os << "coordinates of node " << i + 1 << " of "
+                                                << in_block << " in the block at line "
+                                                << block_line;
+                                         }),
+                          cursor);
+            builder.add_node_coordinates(read_xyz(tokens));
+            for (int p = 0; p < n_parametric; ++p)
+                tokens.next_double("parametric coordinate");
+            tokens.expect_end(n_parametric > 0 ? "'x y z' and the parametric coordinates"
+                                               : "'x y z'");
+        }
+        n_read += in_block;
+    }
+    CORO_CHECK(n_read == n_nodes, InputError,
+               cursor.where() << ": expected " << n_nodes << " nodes as declared at line "
+                              << header_line << ", found " << n_read << " in the blocks");
+    expect_marker(cursor, "$EndNodes",
+                  "the " + std::to_string(n_blocks) + " node entity blocks declared at line " +
+                      std::to_string(header_line));
+}
+
+/// Reads four node tags of a tet, after checking that exactly four remain on the line.
+std::array<std::uint64_t, 4> read_tet_nodes(Tokens& tokens, const LineCursor& cursor)
+{
+    const std::size_t n = tokens.remaining();
+    CORO_CHECK(n == 4, InputError,
+               cursor.where() << ": expected 4 node tags for a tet, found " << n);
+    std::array<std::uint64_t, 4> tags{};
+    for (auto& tag : tags)
+        tag = tokens.next_count("node tag");
+    return tags;
+}
+
+/// MSH 2.2 `$Elements`: a count, then `tag type ntags tags... nodes...` lines.
+void read_elements_v22(LineCursor& cursor, MshBuilder& builder)
+{
+    Tokens header(next_data_line(cursor, [](std::ostream& os) { os << "the number of elements"; }),
+                  cursor);
+    const long header_line = cursor.line();
+    const std::uint64_t count = header.next_count("the number of elements");
+    header.expect_end("the number of elements");
+    builder.reserve_elements(count);
+    for (std::uint64_t i = 0; i < count; ++i) {
+        Tokens tokens(next_data_line(cursor,
+                                     [&](std::ostream& os) {
+                                         os << "element " << i + 1 << " of " << count
+                                            << " declared at line " << header_line
+                                            << " ('tag type ntags tags... nodes...')";
+                                     }),
+                      cursor);
+        const std::uint64_t tag = tokens.next_count("element tag");
+        const int type = tokens.next_int("element type");
+        if (type != MSH_TET4)
+            continue;
+        const std::uint64_t n_tags = tokens.next_count("the number of element tags");
+        CORO_CHECK(n_tags <= tokens.remaining(), InputError,
+                   cursor.where() << ": expected " << n_tags
+                                  << " element tags and 4 node tags, found " << tokens.remaining()
+                                  << " values");
+        for (std::uint64_t t = 0; t < n_tags; ++t)
+            tokens.next("element tag");
+        builder.add_tet(cursor, tag, read_tet_nodes(tokens, cursor));
+    }
+    expect_marker(cursor, "$EndElements",
+                  "the " + std::to_string(count) + " elements declared at line " +
+                      std::to_string(header_line));
+}
+
+/// MSH 4.1 `$Elements`: entity blocks of one element type each.
+void read_elements_v41(LineCursor& cursor, MshBuilder& builder)
+{
+    Tokens header(next_data_line(cursor,
+                                 [](std::ostream& os) {
+                                     os << "'numEntityBlocks numElements minElementTag "
+                                           "maxElementTag'";
+                                 }),
+                  cursor);
+    const long header_line = cursor.line();
+    const std::uint64_t n_blocks = header.next_count("the number of element entity blocks");
+    const std::uint64_t n_elements = header.next_count("the number of elements");
+    header.next_count("the minimum element tag");
+    header.next_count("the maximum element tag");
+    header.expect_end("'numEntityBlocks numElements minElementTag maxElementTag'");
+
+    std::uint64_t n_read = 0;
+    for (std::uint64_t b = 0; b < n_blocks; ++b) {
+        Tokens block(next_data_line(cursor,
+                                    [&](std::ostream& os) {
+                                        os << "element entity block " << b + 1 << " of "
+                                           << n_blocks << " declared at line " << header_line
+                                           << " ('entityDim entityTag elementType "
+                                              "numElementsInBlock')";
+                                    }),
+                     cursor);
+        block.next_int("entity dimension");
+        block.next_int("entity tag");
+        const int type = block.next_int("element type");
+        const std::uint64_t in_block = block.next_count("the number of elements in the block");
+        block.expect_end("'entityDim entityTag elementType numElementsInBlock'");
+        const long block_line = cursor.line();
+        if (type == MSH_TET4)
+            builder.reserve_elements(in_block);
+        for (std::uint64_t i = 0; i < in_block; ++i) {
+            const std::string_view line =
+                next_data_line(cursor, [&](std::ostream& os) {
+                    os << "element " << i + 1 << " of " << in_block << " in the block at line "
+                       << block_line;
+                });
+            if (type != MSH_TET4)
+                continue;
+            Tokens tokens(line, cursor);
+            const std::uint64_t tag = tokens.next_count("element tag");
+            builder.add_tet(cursor, tag, read_tet_nodes(tokens, cursor));
+        }
+        n_read += in_block;
+    }
+    CORO_CHECK(n_read == n_elements, InputError,
+               cursor.where() << ": expected " << n_elements << " elements as declared at line "
+                              << header_line << ", found " << n_read << " in the blocks");
+    expect_marker(cursor, "$EndElements",
+                  "the " + std::to_string(n_blocks) + " element entity blocks declared at line " +
+                      std::to_string(header_line));
+}
+
+/// Skips a section we do not read ($Entities, $PhysicalNames, $Periodic, ...).
+void skip_section(LineCursor& cursor, std::string_view name)
+{
+    const long opened = cursor.line();
+    const std::string end_marker = "$End" + std::string(name.substr(1));
+    std::string_view line;
+    while (cursor.next(line))
+        if (line == end_marker)
+            return;
+    CORO_THROW(InputError, cursor.where() << ": expected " << end_marker << " closing " << name
+                                          << " opened at line " << opened
+                                          << ", found end of file");
+}
+
+} // namespace
+
+TetMesh read_msh(const std::filesystem::path& path)
+{
+    const std::string text = read_file(path);
+    LineCursor cursor(path.string(), text);
+
+    std::string_view line;
+    const bool has_first = cursor.next(line);
+    CORO_CHECK(has_first, InputError,
+               cursor.where() << ": expected $MeshFormat, found an empty file");
+    CORO_CHECK(line == "$MeshFormat", InputError,
+               cursor.where() << ": expected $MeshFormat on the first line of a Gmsh MSH file, "
+                                 "found "
+                              << in_quotes(line));
+    const MshVersion version = read_mesh_format(cursor);
+
+    MshBuilder builder;
+    long nodes_line = 0;
+    long elements_line = 0;
+    while (cursor.next(line)) {
+        CORO_CHECK(line.front() == '$', InputError,
+                   cursor.where() << ": expected a section such as $Nodes or $Elements, found "
+                                  << in_quotes(line));
+        if (line == "$Nodes") {
+            CORO_CHECK(nodes_line == 0, InputError,
+                       cursor.where() << ": expected one $Nodes section, found a second one "
+                                         "(the first is at line "
+                                      << nodes_line << ")");
+            nodes_line = cursor.line();
+            if (version == MshVersion::V22)
+                read_nodes_v22(cursor, builder);
+            else
+                read_nodes_v41(cursor, builder);
+        } else if (line == "$Elements") {
+            CORO_CHECK(elements_line == 0, InputError,
+                       cursor.where() << ": expected one $Elements section, found a second one "
+                                         "(the first is at line "
+                                      << elements_line << ")");
+            CORO_CHECK(nodes_line != 0, InputError,
+                       cursor.where()
+                           << ": expected $Nodes before $Elements, found $Elements first");
+            elements_line = cursor.line();
+            if (version == MshVersion::V22)
+                read_elements_v22(cursor, builder);
+            else
+                read_elements_v41(cursor, builder);
+        } else if (line == "$MeshFormat") {
+            CORO_THROW(InputError, cursor.where() << ": expected one $MeshFormat section, found a "
+                                                     "second one");
+        } else if (line.size() >= 4 && line.substr(0, 4) == "$End") {
+            CORO_THROW(InputError, cursor.where()
+                                       << ": expected a section start such as $Nodes, found "
+                                       << in_quotes(line) << " without its opening line");
+        } else {
+            skip_section(cursor, line);
+        }
+    }
+    return builder.finish();
+}
+
+TetMesh read_tet_mesh(const std::filesystem::path& path)
+{
+    std::string extension = path.extension().string();
+    std::transform(extension.begin(), extension.end(), extension.begin(),
+                   [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+    CORO_CHECK(extension == ".msh", InputError,
+               path.string() << ": unsupported mesh extension "
+                             << (extension.empty() ? std::string("(none)") : in_quotes(extension))
+                             << ", expected one of: .msh (Gmsh 2.2 or 4.1 ASCII)");
+    return read_msh(path);
+}
+
+void write_msh22(const std::filesystem::path& path, const TetMesh& mesh)
+{
+    std::string out;
+    out.reserve(64 + static_cast<std::size_t>(mesh.num_vertices()) * 64 +
+                static_cast<std::size_t>(mesh.num_tets()) * 48);
+    std::array<char, 64> buffer{};
+    const auto append_int = [&](long long value) {
+        const auto result = std::to_chars(buffer.data(), buffer.data() + buffer.size(), value);
+        out.append(buffer.data(), result.ptr);
+    };
+    const auto append_double = [&](double value) {
+        // Shortest representation that reads back to the same double (round trip exact).
+        const auto result = std::to_chars(buffer.data(), buffer.data() + buffer.size(), value);
+        out.append(buffer.data(), result.ptr);
+    };
+
+    out += "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$Nodes\n";
+    append_int(mesh.num_vertices());
+    out += '\n';
+    for (Index v = 0; v < mesh.num_vertices(); ++v) {
+        append_int(v + 1LL);
+        for (int d = 0; d < 3; ++d) {
+            out += ' ';
+            append_double(mesh.rest_positions(v, d));
+        }
+        out += '\n';
+    }
+    out += "$EndNodes\n$Elements\n";
+    append_int(mesh.num_tets());
+    out += '\n';
+    for (Index t = 0; t < mesh.num_tets(); ++t) {
+        append_int(t + 1LL);
+        out += " 4 2 0 1"; // type 4, two tags: physical 0 (none), elementary entity 1
+        for (int k = 0; k < 4; ++k) {
+            CORO_ASSERT(mesh.tets(t, k) >= 0 && mesh.tets(t, k) < mesh.num_vertices());
+            out += ' ';
+            append_int(mesh.tets(t, k) + 1LL);
+        }
+        out += '\n';
+    }
+    out += "$EndElements\n";
+
+    std::unique_ptr<std::FILE, int (*)(std::FILE*)> file(std::fopen(path.c_str(), "wb"),
+                                                         &std::fclose);
+    CORO_CHECK(file != nullptr, InputError,
+               path.string() << ": cannot open for writing: " << std::strerror(errno));
+    const std::size_t written = std::fwrite(out.data(), 1, out.size(), file.get());
+    CORO_CHECK(written == out.size(), InputError,
+               path.string() << ": write failed: " << std::strerror(errno));
+    CORO_CHECK(std::fclose(file.release()) == 0, InputError,
+               path.string() << ": write failed on close: " << std::strerror(errno));
+}
+
+} // namespace coro
