@@ -1,0 +1,194 @@
+#include "mesh_fixtures.hpp"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <vtkCellData.h>
+#include <vtkCompositeDataSet.h>
+#include <vtkDataSet.h>
+#include <vtkInformation.h>
+#include <vtkMultiBlockDataSet.h>
+#include <vtkNew.h>
+#include <vtkPointData.h>
+#include <vtkUnstructuredGrid.h>
+#include <vtkXMLMultiBlockDataReader.h>
+
+#include <sys/wait.h>
+
+#include <fstream>
+#include <regex>
+#include <sstream>
+#include <string>
+
+namespace fs = std::filesystem;
+using ::testing::HasSubstr;
+
+namespace {
+
+struct Outcome {
+    int exit_code;
+    std::string out;
+    std::string err;
+};
+
+std::string slurp(const fs::path& path)
+{
+    std::ifstream file(path);
+    std::stringstream text;
+    text << file.rdbuf();
+    return text.str();
+}
+
+Outcome run(const std::string& arguments, const fs::path& dir)
+{
+    const fs::path out = dir / "stdout.txt", err = dir / "stderr.txt";
+    const std::string command = std::string(CORO_CLI_PATH) + " " + arguments + " > " + out.string() + " 2> " +
+                                err.string() + " < /dev/null";
+    const int status = std::system(command.c_str());
+    return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, slurp(out), slurp(err)};
+}
+
+const char* SMALL_CASE = R"([simulation]
+dt = 0.01
+steps = 4
+output_every = 2
+gravity = [0.0, -9.81, 0.0]
+
+[solver]
+max_iterations = 50
+
+[[body]]
+name = "block"
+shape = "box"
+min = [0.0, 0.0, 0.0]
+max = [2.0, 1.0, 1.0]
+cells = [4, 2, 2]
+young = 1e5
+
+[[body.fixed]]
+min = [-1.0, -1.0, -1.0]
+max = [0.0, 2.0, 2.0]
+)";
+
+// Every .vtm the .pvd lists, in order.
+std::vector<std::string> listed_frames(const fs::path& pvd)
+{
+    const std::string text = slurp(pvd);
+    std::vector<std::string> files;
+    const std::regex entry("file=\"([^\"]+)\"");
+    for (auto it = std::sregex_iterator(text.begin(), text.end(), entry); it != std::sregex_iterator(); ++it)
+        files.push_back((*it)[1]);
+    return files;
+}
+
+} // namespace
+
+TEST(CorocontactRun, WritesSeriesThatVtkLoadsAndASummary)
+{
+    const fs::path dir = coro::test::scratch_dir("cli_run");
+    const fs::path case_file = coro::test::write_text(dir / "small.toml", SMALL_CASE);
+    const Outcome outcome = run("run " + case_file.string() + " --out " + (dir / "out").string(), dir);
+    ASSERT_EQ(outcome.exit_code, 0) << outcome.err;
+    EXPECT_THAT(outcome.out, HasSubstr("small: 4 steps"));
+    EXPECT_THAT(outcome.out, HasSubstr("phases [s]: rotation"));
+
+    const std::vector<std::string> frames = listed_frames(dir / "out" / "small.pvd");
+    ASSERT_EQ(frames.size(), 3u); // steps 0, 2, 4
+    for (const std::string& frame : frames) {
+        vtkNew<vtkXMLMultiBlockDataReader> reader;
+        reader->SetFileName((dir / "out" / frame).string().c_str());
+        reader->Update();
+        auto* blocks = vtkMultiBlockDataSet::SafeDownCast(reader->GetOutput());
+        ASSERT_NE(blocks, nullptr) << frame;
+        ASSERT_EQ(blocks->GetNumberOfBlocks(), 1u);
+        EXPECT_STREQ(blocks->GetMetaData(0u)->Get(vtkCompositeDataSet::NAME()), "block");
+        auto* grid = vtkUnstructuredGrid::SafeDownCast(blocks->GetBlock(0));
+        ASSERT_NE(grid, nullptr) << frame;
+        EXPECT_EQ(grid->GetNumberOfPoints(), 5 * 3 * 3);
+        EXPECT_EQ(grid->GetNumberOfCells(), 6 * 4 * 2 * 2);
+        EXPECT_NE(grid->GetPointData()->GetArray("displacement"), nullptr);
+        EXPECT_NE(grid->GetPointData()->GetArray("velocity"), nullptr);
+        EXPECT_NE(grid->GetCellData()->GetArray("von_mises"), nullptr);
+    }
+    const std::string summary = slurp(dir / "out" / "small.summary.json");
+    for (const char* key : {"\"steps\": 4", "\"wall_s\"", "\"steps_per_s\"", "\"threads\"", "\"bodies\": 1",
+                            "\"tets\": 96", "\"rotation\"", "\"assembly\"", "\"solve\"", "\"contact\"",
+                            "\"output\"", "\"cg_iterations_mean\"", "\"cg_residual_mean\"", "\"peak_rss_mb\""})
+        EXPECT_THAT(summary, HasSubstr(key));
+}
+
+TEST(CorocontactRun, BadCaseExitsWithTwoNamingLineAndWritesNothing)
+{
+    const fs::path dir = coro::test::scratch_dir("cli_bad");
+    std::string text = SMALL_CASE;
+    text.replace(text.find("young"), 5, "yuong");
+    const fs::path case_file = coro::test::write_text(dir / "bad.toml", text);
+    const Outcome outcome = run("run " + case_file.string() + " --out " + (dir / "out").string(), dir);
+    EXPECT_EQ(outcome.exit_code, 2);
+    EXPECT_THAT(outcome.err, HasSubstr("bad.toml:16:"));
+    EXPECT_THAT(outcome.err, HasSubstr("yuong"));
+    EXPECT_FALSE(fs::exists(dir / "out"));
+}
+
+TEST(CorocontactRun, MissingCaseFileExitsWithTwo)
+{
+    const fs::path dir = coro::test::scratch_dir("cli_missing");
+    const Outcome outcome = run("run " + (dir / "nope.toml").string(), dir);
+    EXPECT_EQ(outcome.exit_code, 2);
+    EXPECT_THAT(outcome.err, HasSubstr("nope.toml"));
+}
+
+TEST(CorocontactRun, DivergenceExitsWithThreeAndKeepsReadableFrames)
+{
+    const fs::path dir = coro::test::scratch_dir("cli_diverge");
+    std::string text = SMALL_CASE;
+    text.replace(text.find("gravity = [0.0, -9.81, 0.0]"), 27, "gravity = [0.0, -1e300, 0.0]");
+    text.replace(text.find("dt = 0.01"), 9, "dt = 1e20");
+    const fs::path case_file = coro::test::write_text(dir / "diverge.toml", text);
+    const Outcome outcome = run("run " + case_file.string() + " --out " + (dir / "out").string(), dir);
+    EXPECT_EQ(outcome.exit_code, 3);
+    EXPECT_THAT(outcome.err, HasSubstr("step 1"));
+    const std::vector<std::string> frames = listed_frames(dir / "out" / "diverge.pvd");
+    ASSERT_EQ(frames.size(), 1u);
+    vtkNew<vtkXMLMultiBlockDataReader> reader;
+    reader->SetFileName((dir / "out" / frames[0]).string().c_str());
+    reader->Update();
+    EXPECT_EQ(vtkMultiBlockDataSet::SafeDownCast(reader->GetOutput())->GetNumberOfBlocks(), 1u);
+}
+
+TEST(CorocontactRun, StepsAndThreadsOptions)
+{
+    const fs::path dir = coro::test::scratch_dir("cli_opts");
+    const fs::path case_file = coro::test::write_text(dir / "small.toml", SMALL_CASE);
+    const Outcome outcome =
+        run("run " + case_file.string() + " --steps 2 --threads 1 --quiet --out " + (dir / "o").string(), dir);
+    ASSERT_EQ(outcome.exit_code, 0) << outcome.err;
+    EXPECT_THAT(outcome.out, HasSubstr("2 steps"));
+    EXPECT_THAT(outcome.out, HasSubstr("1 threads"));
+    EXPECT_EQ(outcome.err, "");
+    EXPECT_EQ(run("run " + case_file.string() + " --threads 0", dir).exit_code, 2);
+    EXPECT_EQ(run("run", dir).exit_code, 2);
+}
+
+TEST(CorocontactInfo, DescribesAMesh)
+{
+    const fs::path dir = coro::test::scratch_dir("cli_info");
+    const Outcome outcome = run(std::string("info ") + CORO_TEST_DATA_DIR + "/msh/cube_v41.msh", dir);
+    ASSERT_EQ(outcome.exit_code, 0) << outcome.err;
+    EXPECT_THAT(outcome.out, HasSubstr("nodes 76, tets 172"));
+    EXPECT_THAT(outcome.out, HasSubstr("closed and oriented"));
+    EXPECT_EQ(run("info " + (dir / "absent.msh").string(), dir).exit_code, 2);
+}
+
+TEST(Corocontact, HelpAndVersion)
+{
+    const fs::path dir = coro::test::scratch_dir("cli_help");
+    Outcome outcome = run("--version", dir);
+    EXPECT_EQ(outcome.exit_code, 0);
+    EXPECT_THAT(outcome.out, HasSubstr("corocontact 0."));
+    outcome = run("run --help", dir);
+    EXPECT_EQ(outcome.exit_code, 0);
+    EXPECT_THAT(outcome.out, HasSubstr("--threads"));
+    EXPECT_EQ(run("info --version", dir).exit_code, 0);
+    EXPECT_EQ(run("frobnicate", dir).exit_code, 2);
+}
