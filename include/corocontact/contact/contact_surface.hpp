@@ -1,0 +1,30 @@
+#pragma once
+/// @file contact_surface.hpp
+/// @brief What contact detection sees of a body: a closed triangle surface and its tree.
+
+#include <corocontact/contact/aabb_tree.hpp>
+#include <corocontact/core/types.hpp>
+
+#include <string>
+#include <vector>
+
+namespace coro {
+
+/// The contact surface of one body (or one static obstacle mesh).
+struct ContactSurface {
+    std::string name;             ///< body name, for reports
+    Positions vertices;           ///< #S×3 current positions of the surface vertices
+    Tris faces;                   ///< #F×3 into vertices, outward (counter-clockwise from outside)
+    std::vector<Index> source_id; ///< #S: the vertex's node index in the body's mesh file
+    bool closed = true;           ///< closed and consistently oriented (else: winding number only)
+    AabbTree tree;                ///< over faces; build() once, refit() after vertices move
+
+    /// Builds a surface from a subset of a body's nodes: `faces` index the body's nodes,
+    /// are compacted to the vertices they use (ascending node index) and the tree is built.
+    static ContactSurface from_body(std::string name, CRef<Positions> body_positions, const Tris& faces);
+
+    /// Copies the body's current node positions into `vertices` and refits the tree.
+    void update(CRef<Positions> body_positions);
+};
+
+} // namespace coro
