@@ -3,6 +3,7 @@
 #include <corocontact/core/error.hpp>
 #include <corocontact/core/primitives.hpp>
 #include <corocontact/io/mesh_readers.hpp>
+#include <corocontact/partition/partition.hpp>
 
 #include <sstream>
 
@@ -48,9 +49,9 @@ LoadedScene load_scene(const CaseSpec& spec)
 {
     LoadedScene loaded;
     for (const BodySpec& body_spec : spec.bodies) {
-        TetMesh mesh = load_body_mesh(body_spec, loaded.warnings);
-        const std::vector<Index> unused = unreferenced_vertices(mesh);
-        Body body(std::move(mesh), body_spec);
+        const TetMesh mesh = load_body_mesh(body_spec, loaded.warnings);
+        Body body(mesh, body_spec, default_num_parts(mesh.num_tets(), spec.solver.parts_per_thread));
+        const std::vector<Index> unused = unreferenced_vertices(body.mesh());
         for (const Index v : unused)
             body.fix_vertex(v);
         if (!unused.empty())

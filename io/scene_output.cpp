@@ -13,14 +13,33 @@ std::vector<FrameBlock> scene_frame(const Scene& scene)
     std::vector<FrameBlock> blocks;
     blocks.reserve(scene.bodies.size());
     for (const Body& body : scene.bodies) {
+        // Bodies are numbered internally by METIS part; frames keep the input's order.
+        const Index n_vertices = body.num_vertices(), n_tets = body.mesh().num_tets();
+        const VecX displacement = body.displacements();
+        const VecX stress = body.fem().von_mises_stress(body.positions());
         FrameBlock block;
         block.name = body.name();
-        block.points = as_positions(body.positions());
-        block.tets = body.mesh().tets;
-        const VecX displacement = body.displacements();
-        block.point_data.push_back({"displacement", as_positions(displacement)});
-        block.point_data.push_back({"velocity", as_positions(body.velocities())});
-        block.cell_data.push_back({"von_mises", body.fem().von_mises_stress(body.positions())});
+        block.points.resize(n_vertices, 3);
+        Eigen::MatrixXd u(n_vertices, 3), v(n_vertices, 3);
+        for (Index i = 0; i < n_vertices; ++i) {
+            const Index row = body.input_node(i);
+            block.points.row(row) = body.positions().segment<3>(3 * i).transpose();
+            u.row(row) = displacement.segment<3>(3 * i).transpose();
+            v.row(row) = body.velocities().segment<3>(3 * i).transpose();
+        }
+        block.tets.resize(n_tets, 4);
+        Eigen::MatrixXd von_mises(n_tets, 1), partition(n_tets, 1);
+        for (Index t = 0; t < n_tets; ++t) {
+            const Index row = body.input_tet(t);
+            for (int a = 0; a < 4; ++a)
+                block.tets(row, a) = body.input_node(body.mesh().tets(t, a));
+            von_mises(row, 0) = stress[t];
+            partition(row, 0) = body.part_of_tet(t);
+        }
+        block.point_data.push_back({"displacement", std::move(u)});
+        block.point_data.push_back({"velocity", std::move(v)});
+        block.cell_data.push_back({"von_mises", std::move(von_mises)});
+        block.cell_data.push_back({"partition", std::move(partition)});
         blocks.push_back(std::move(block));
     }
     return blocks;

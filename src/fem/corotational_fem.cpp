@@ -2,12 +2,14 @@
 
 #include <corocontact/core/error.hpp>
 #include <corocontact/fem/corotation.hpp>
+#include <corocontact/partition/element_loop.hpp>
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <cmath>
+#include <numeric>
 
 namespace coro {
 
@@ -17,29 +19,41 @@ constexpr Index ROW_GRAIN = 256;
 
 std::size_t at(Index i) { return static_cast<std::size_t>(i); }
 
-Mat34 gather_nodes(const Tets& tets, Index t, CRef<VecX> x)
+Mat34 gather_nodes(const Tets& tets, Index t, const double* x)
 {
     Mat34 nodes;
     for (int a = 0; a < 4; ++a)
-        nodes.col(a) = x.segment<3>(3 * tets(t, a));
+        nodes.col(a) = Eigen::Map<const Vec3>(x + 3 * static_cast<std::ptrdiff_t>(tets(t, a)));
     return nodes;
 }
 
-// Exclusive prefix sum of counts, in place; returns the total.
-Index prefix_sum(std::vector<Index>& counts)
+// One part holding every tet and node, in the given order.
+PartLayout single_part_layout(const TetMesh& mesh)
 {
-    Index total = 0;
-    for (auto& c : counts) {
-        const Index n = c;
-        c = total;
-        total += n;
+    TetPartition partition;
+    partition.num_parts = 1;
+    partition.tet_part.assign(at(mesh.num_tets()), 0);
+    return make_part_layout(mesh.tets, mesh.num_vertices(), partition);
+}
+
+// CSR from (key, value) pairs sorted by key then value; keys in [0, n).
+void build_csr(std::vector<std::pair<Index, Index>>& pairs, Index n, std::vector<Index>& offsets,
+               std::vector<Index>& values)
+{
+    std::sort(pairs.begin(), pairs.end());
+    offsets.assign(at(n) + 1, 0);
+    values.resize(pairs.size());
+    for (std::size_t i = 0; i < pairs.size(); ++i) {
+        ++offsets[at(pairs[i].first) + 1];
+        values[i] = pairs[i].second;
     }
-    return total;
+    std::partial_sum(offsets.begin(), offsets.end(), offsets.begin());
 }
 } // namespace
 
-CorotationalFem::CorotationalFem(const TetMesh& mesh, const Material& material)
-    : m_tets(mesh.tets), m_lambda(material.lambda()), m_mu(material.mu())
+CorotationalFem::CorotationalFem(const TetMesh& mesh, const Material& material, PartLayout layout)
+    : m_tets(mesh.tets), m_layout(layout.tet_offsets.empty() ? single_part_layout(mesh) : std::move(layout)),
+      m_lambda(material.lambda()), m_mu(material.mu())
 {
     const Index n_vertices = mesh.num_vertices();
     const Index n_tets = mesh.num_tets();
@@ -48,11 +62,9 @@ CorotationalFem::CorotationalFem(const TetMesh& mesh, const Material& material)
     m_volumes.resize(at(n_tets));
     m_gradients.resize(at(n_tets));
     m_rotations.assign(at(n_tets), Mat3::Identity());
-    m_rotated_gradients.resize(at(n_tets));
-    m_force_slots.resize(at(n_tets));
 
     for (Index t = 0; t < n_tets; ++t) {
-        const Mat34 x = gather_nodes(m_tets, t, m_rest);
+        const Mat34 x = gather_nodes(m_tets, t, m_rest.data());
         TetRest rest;
         try {
             rest = make_tet_rest(x.col(0), x.col(1), x.col(2), x.col(3));
@@ -61,103 +73,267 @@ CorotationalFem::CorotationalFem(const TetMesh& mesh, const Material& material)
         }
         m_volumes[at(t)] = rest.volume;
         m_gradients[at(t)] = shape_gradients(rest);
-        m_rotated_gradients[at(t)] = m_gradients[at(t)];
         for (int a = 0; a < 4; ++a)
             m_masses[m_tets(t, a)] += material.density * rest.volume / 4.0;
     }
 
-    // Node → corners, in ascending tet order.
-    m_node_offsets.assign(at(n_vertices) + 1, 0);
+    // Block pattern: node r couples with every node sharing a tet (and itself).
+    std::vector<std::vector<Index>> neighbours(at(n_vertices));
+    for (Index v = 0; v < n_vertices; ++v)
+        neighbours[at(v)].push_back(v);
     for (Index t = 0; t < n_tets; ++t)
         for (int a = 0; a < 4; ++a)
-            ++m_node_offsets[at(m_tets(t, a))];
-    m_node_corners.resize(at(prefix_sum(m_node_offsets)));
-    {
-        std::vector<Index> cursor(m_node_offsets.begin(), m_node_offsets.end() - 1);
-        for (Index t = 0; t < n_tets; ++t)
-            for (int a = 0; a < 4; ++a)
-                m_node_corners[at(cursor[at(m_tets(t, a))]++)] = 4 * t + a;
-    }
-
-    // Block pattern: node r couples with every node sharing a tet (and itself).
-    m_row_offsets.assign(at(n_vertices) + 1, 0);
-    std::vector<Index> neighbours;
-    for (Index r = 0; r < n_vertices; ++r) {
-        neighbours.clear();
-        neighbours.push_back(r);
-        for (Index k = m_node_offsets[at(r)]; k < m_node_offsets[at(r) + 1]; ++k) {
-            const Index t = m_node_corners[at(k)] / 4;
             for (int b = 0; b < 4; ++b)
-                neighbours.push_back(m_tets(t, b));
-        }
-        std::sort(neighbours.begin(), neighbours.end());
-        neighbours.erase(std::unique(neighbours.begin(), neighbours.end()), neighbours.end());
-        m_columns.insert(m_columns.end(), neighbours.begin(), neighbours.end());
+                neighbours[at(m_tets(t, a))].push_back(m_tets(t, b));
+    m_row_offsets.assign(at(n_vertices) + 1, 0);
+    for (Index r = 0; r < n_vertices; ++r) {
+        auto& row = neighbours[at(r)];
+        std::sort(row.begin(), row.end());
+        row.erase(std::unique(row.begin(), row.end()), row.end());
+        m_columns.insert(m_columns.end(), row.begin(), row.end());
         m_row_offsets[at(r) + 1] = static_cast<Index>(m_columns.size());
+        std::vector<Index>().swap(row);
     }
-
-    // Contributions of each tet's 16 blocks, bucketed by stored block in tet order.
     const BsrMatrix pattern = make_matrix();
-    std::vector<Index> block_of(at(16 * n_tets));
-    m_block_offsets.assign(m_columns.size() + 1, 0);
-    for (Index t = 0; t < n_tets; ++t)
-        for (int i = 0; i < 4; ++i)
-            for (int j = 0; j < 4; ++j) {
-                const Index k = pattern.find(m_tets(t, i), m_tets(t, j));
-                block_of[at(16 * t + 4 * i + j)] = k;
-                ++m_block_offsets[at(k)];
+
+    // Targets of every tet's blocks and corner forces; interface rows go to part buffers.
+    const Index first_interface = m_layout.first_interface_node();
+    const Index parts = m_layout.num_parts;
+    m_block_targets.resize(at(n_tets));
+    m_force_targets.resize(at(n_tets));
+    m_part_block_buffer_offsets.assign(at(parts) + 1, 0);
+    m_part_force_buffer_offsets.assign(at(parts) + 1, 0);
+    std::vector<Index> block_entry(m_columns.size(), -1), node_entry(at(n_vertices), -1);
+    std::vector<std::pair<Index, Index>> block_pairs, force_pairs; // (block or node, entry)
+    Index n_block_entries = 0, n_force_entries = 0;
+    for (Index p = 0; p < parts; ++p) {
+        std::vector<Index> touched_blocks, touched_nodes;
+        for (Index t = m_layout.tet_offsets[at(p)]; t < m_layout.tet_offsets[at(p) + 1]; ++t)
+            for (int i = 0; i < 4; ++i) {
+                const Index row = m_tets(t, i);
+                if (row < first_interface) {
+                    m_force_targets[at(t)][at(i)] = row;
+                    for (int j = 0; j < 4; ++j)
+                        m_block_targets[at(t)][at(4 * i + j)] = pattern.find(row, m_tets(t, j));
+                    continue;
+                }
+                if (node_entry[at(row)] < 0) {
+                    node_entry[at(row)] = n_force_entries++;
+                    touched_nodes.push_back(row);
+                    force_pairs.emplace_back(row - first_interface, node_entry[at(row)]);
+                }
+                m_force_targets[at(t)][at(i)] = -1 - node_entry[at(row)];
+                for (int j = 0; j < 4; ++j) {
+                    const Index k = pattern.find(row, m_tets(t, j));
+                    if (block_entry[at(k)] < 0) {
+                        block_entry[at(k)] = n_block_entries++;
+                        touched_blocks.push_back(k);
+                        block_pairs.emplace_back(k, block_entry[at(k)]);
+                    }
+                    m_block_targets[at(t)][at(4 * i + j)] = -1 - block_entry[at(k)];
+                }
             }
-    m_block_contributions.resize(at(prefix_sum(m_block_offsets)));
-    std::vector<Index> cursor(m_block_offsets.begin(), m_block_offsets.end() - 1);
-    for (Index c = 0; c < 16 * n_tets; ++c)
-        m_block_contributions[at(cursor[at(block_of[at(c)])]++)] = c;
+        for (const Index k : touched_blocks)
+            block_entry[at(k)] = -1;
+        for (const Index v : touched_nodes)
+            node_entry[at(v)] = -1;
+        m_part_block_buffer_offsets[at(p) + 1] = n_block_entries;
+        m_part_force_buffer_offsets[at(p) + 1] = n_force_entries;
+    }
+    m_block_buffer.assign(9 * at(n_block_entries), 0.0);
+    m_force_buffer.assign(3 * at(n_force_entries), 0.0);
+
+    // Interface blocks: every block of an interface row, with its entries in part order.
+    std::vector<Index> block_offsets_all, block_entries_all;
+    build_csr(block_pairs, static_cast<Index>(m_columns.size()), block_offsets_all, block_entries_all);
+    m_interface_block_offsets.push_back(0);
+    for (Index k = m_row_offsets[at(first_interface)]; k < static_cast<Index>(m_columns.size()); ++k) {
+        m_interface_blocks.push_back(k);
+        for (Index e = block_offsets_all[at(k)]; e < block_offsets_all[at(k) + 1]; ++e)
+            m_interface_block_entries.push_back(block_entries_all[at(e)]);
+        m_interface_block_offsets.push_back(static_cast<Index>(m_interface_block_entries.size()));
+    }
+    build_csr(force_pairs, n_vertices - first_interface, m_interface_force_offsets, m_interface_force_entries);
+}
+
+void CorotationalFem::part_pass(Index part, const Pass& pass)
+{
+    const Index t_begin = m_layout.tet_offsets[at(part)], t_end = m_layout.tet_offsets[at(part) + 1];
+    const Index r_begin = m_layout.node_offsets[at(part)], r_end = m_layout.node_offsets[at(part) + 1];
+    double* values = pass.matrix ? pass.matrix->values().data() : nullptr;
+    double* block_buffer = m_block_buffer.data();
+    double* force_buffer = m_force_buffer.data();
+
+    if (values) {
+        std::fill(values + 9 * static_cast<std::ptrdiff_t>(m_row_offsets[at(r_begin)]),
+                  values + 9 * static_cast<std::ptrdiff_t>(m_row_offsets[at(r_end)]), 0.0);
+        for (Index r = r_begin; r < r_end; ++r)
+            pass.matrix->block(pass.matrix->diagonal(r)).diagonal().array() += pass.mass_scale * m_masses[r];
+        std::fill(block_buffer + 9 * static_cast<std::ptrdiff_t>(m_part_block_buffer_offsets[at(part)]),
+                  block_buffer + 9 * static_cast<std::ptrdiff_t>(m_part_block_buffer_offsets[at(part) + 1]), 0.0);
+    }
+    if (pass.forces) {
+        std::fill(pass.forces + 3 * static_cast<std::ptrdiff_t>(r_begin),
+                  pass.forces + 3 * static_cast<std::ptrdiff_t>(r_end), 0.0);
+        std::fill(force_buffer + 3 * static_cast<std::ptrdiff_t>(m_part_force_buffer_offsets[at(part)]),
+                  force_buffer + 3 * static_cast<std::ptrdiff_t>(m_part_force_buffer_offsets[at(part) + 1]), 0.0);
+    }
+    const auto block_slot = [&](Index target) {
+        return target >= 0 ? values + 9 * static_cast<std::ptrdiff_t>(target)
+                           : block_buffer + 9 * static_cast<std::ptrdiff_t>(-1 - target);
+    };
+    const auto force_slot = [&](Index target) {
+        return target >= 0 ? pass.forces + 3 * static_cast<std::ptrdiff_t>(target)
+                           : force_buffer + 3 * static_cast<std::ptrdiff_t>(-1 - target);
+    };
+
+    for (Index t = t_begin; t < t_end; ++t) {
+        const Mat34& g = m_gradients[at(t)];
+        const Mat34 nodes = pass.x ? gather_nodes(m_tets, t, pass.x) : Mat34(Mat34::Zero());
+        if (pass.rotate) {
+            const Mat3 f = nodes * g.transpose();
+            CORO_CHECK(f.allFinite(), NumericalError, "tet " << t << ": the deformation gradient is not finite");
+            m_rotations[at(t)] = polar_rotation(f, m_rotations[at(t)]);
+        }
+        const Mat34 rg = m_rotations[at(t)] * g; // rotated gradients G_i
+        const double volume = m_volumes[at(t)];
+
+        if (pass.forces) {
+            const Mat3 m = nodes * rg.transpose(); // F Rᵀ
+            const Mat3 strain = 0.5 * (m + m.transpose()) - Mat3::Identity();
+            const Mat34 f = -volume * linear_stress(strain, m_lambda, m_mu) * rg;
+            for (int a = 0; a < 4; ++a) {
+                double* out = force_slot(m_force_targets[at(t)][at(a)]);
+                out[0] += f(0, a);
+                out[1] += f(1, a);
+                out[2] += f(2, a);
+            }
+        }
+        if (values) {
+            const double s = pass.stiffness_scale * volume;
+            const double ls = s * m_lambda, ms = s * m_mu;
+            const auto& targets = m_block_targets[at(t)];
+            for (int i = 0; i < 4; ++i)
+                for (int j = i; j < 4; ++j) {
+                    const Vec3 gi = rg.col(i), gj = rg.col(j);
+                    const double diagonal = ms * gi.dot(gj);
+                    double* kij = block_slot(targets[at(4 * i + j)]);
+                    for (int a = 0; a < 3; ++a)
+                        for (int b = 0; b < 3; ++b)
+                            kij[3 * a + b] += ls * gi[a] * gj[b] + ms * gj[a] * gi[b] + (a == b ? diagonal : 0.0);
+                    if (j == i)
+                        continue;
+                    double* kji = block_slot(targets[at(4 * j + i)]);
+                    for (int a = 0; a < 3; ++a)
+                        for (int b = 0; b < 3; ++b)
+                            kji[3 * b + a] += ls * gi[a] * gj[b] + ms * gj[a] * gi[b] + (a == b ? diagonal : 0.0);
+                }
+        }
+    }
+}
+
+void CorotationalFem::reduce_interfaces(const Pass& pass)
+{
+    const Index first_interface = m_layout.first_interface_node();
+    if (pass.matrix) {
+        BsrMatrix& matrix = *pass.matrix;
+        const auto n_blocks = static_cast<Index>(m_interface_blocks.size());
+        tbb::parallel_for(tbb::blocked_range<Index>(0, n_blocks, ROW_GRAIN), [&](const tbb::blocked_range<Index>& range) {
+            for (Index b = range.begin(); b != range.end(); ++b) {
+                Block3 sum = Block3::Zero();
+                for (Index e = m_interface_block_offsets[at(b)]; e < m_interface_block_offsets[at(b) + 1]; ++e)
+                    sum += Eigen::Map<const Block3>(m_block_buffer.data() + 9 * at(m_interface_block_entries[at(e)]));
+                matrix.block(m_interface_blocks[at(b)]) = sum;
+            }
+        });
+        for (Index r = first_interface; r < num_vertices(); ++r)
+            matrix.block(matrix.diagonal(r)).diagonal().array() += pass.mass_scale * m_masses[r];
+    }
+    if (pass.forces) {
+        const Index n_nodes = num_vertices() - first_interface;
+        tbb::parallel_for(tbb::blocked_range<Index>(0, n_nodes, ROW_GRAIN), [&](const tbb::blocked_range<Index>& range) {
+            for (Index v = range.begin(); v != range.end(); ++v) {
+                Vec3 sum = Vec3::Zero();
+                for (Index e = m_interface_force_offsets[at(v)]; e < m_interface_force_offsets[at(v) + 1]; ++e)
+                    sum += Eigen::Map<const Vec3>(m_force_buffer.data() + 3 * at(m_interface_force_entries[at(e)]));
+                Eigen::Map<Vec3>(pass.forces + 3 * static_cast<std::ptrdiff_t>(first_interface + v)) = sum;
+            }
+        });
+    }
+}
+
+void CorotationalFem::run_pass(const Pass& pass)
+{
+    for_each_part(m_layout.num_parts, [&](Index part) { part_pass(part, pass); });
+    reduce_interfaces(pass);
+}
+
+void CorotationalFem::project_fixed(const std::vector<char>& fixed, BsrMatrix& matrix)
+{
+    if (fixed.empty())
+        return;
+    const auto& offsets = matrix.row_offsets();
+    const auto& columns = matrix.columns();
+    for (Index r = 0; r < matrix.num_block_rows(); ++r) {
+        if (!fixed[at(r)])
+            continue;
+        for (Index k = offsets[at(r)]; k < offsets[at(r) + 1]; ++k) {
+            const Index c = columns[at(k)];
+            if (c == r) {
+                matrix.block(k) = Block3::Identity();
+                continue;
+            }
+            matrix.block(k).setZero();
+            matrix.block(matrix.find(c, r)).setZero(); // the pattern is symmetric
+        }
+    }
 }
 
 void CorotationalFem::update_rotations(CRef<VecX> x)
 {
-    tbb::parallel_for(tbb::blocked_range<Index>(0, num_tets(), TET_GRAIN),
-                      [&](const tbb::blocked_range<Index>& range) {
-                          for (Index t = range.begin(); t != range.end(); ++t) {
-                              const Mat34 nodes = gather_nodes(m_tets, t, x);
-                              const Mat3 f = nodes * m_gradients[at(t)].transpose();
-                              CORO_CHECK(f.allFinite(), NumericalError,
-                                         "tet " << t << ": the deformation gradient is not finite");
-                              m_rotations[at(t)] = polar_rotation(f, m_rotations[at(t)]);
-                              m_rotated_gradients[at(t)] = m_rotations[at(t)] * m_gradients[at(t)];
-                          }
-                      });
+    Pass pass;
+    pass.x = x.data();
+    pass.rotate = true;
+    for_each_part(m_layout.num_parts, [&](Index part) { part_pass(part, pass); });
 }
 
 void CorotationalFem::internal_forces(CRef<VecX> x, Eigen::Ref<VecX> f)
 {
-    tbb::parallel_for(tbb::blocked_range<Index>(0, num_tets(), TET_GRAIN),
-                      [&](const tbb::blocked_range<Index>& range) {
-                          for (Index t = range.begin(); t != range.end(); ++t) {
-                              const Mat34& g = m_rotated_gradients[at(t)];
-                              const Mat3 m = gather_nodes(m_tets, t, x) * g.transpose(); // F Rᵀ
-                              const Mat3 strain = 0.5 * (m + m.transpose()) - Mat3::Identity();
-                              m_force_slots[at(t)] =
-                                  -m_volumes[at(t)] * linear_stress(strain, m_lambda, m_mu) * g;
-                          }
-                      });
-    tbb::parallel_for(tbb::blocked_range<Index>(0, num_vertices(), ROW_GRAIN),
-                      [&](const tbb::blocked_range<Index>& range) {
-                          for (Index v = range.begin(); v != range.end(); ++v) {
-                              Vec3 sum = Vec3::Zero();
-                              for (Index k = m_node_offsets[at(v)]; k < m_node_offsets[at(v) + 1]; ++k) {
-                                  const Index corner = m_node_corners[at(k)];
-                                  sum += m_force_slots[at(corner / 4)].col(corner % 4);
-                              }
-                              f.segment<3>(3 * v) = sum;
-                          }
-                      });
+    Pass pass;
+    pass.x = x.data();
+    pass.forces = f.data();
+    run_pass(pass);
+}
+
+void CorotationalFem::assemble(double stiffness_scale, double mass_scale, const std::vector<char>& fixed,
+                               BsrMatrix& matrix)
+{
+    Pass pass;
+    pass.matrix = &matrix;
+    pass.stiffness_scale = stiffness_scale;
+    pass.mass_scale = mass_scale;
+    run_pass(pass);
+    project_fixed(fixed, matrix);
+}
+
+void CorotationalFem::assemble_with_forces(CRef<VecX> x, double stiffness_scale, double mass_scale,
+                                           const std::vector<char>& fixed, BsrMatrix& matrix, Eigen::Ref<VecX> forces)
+{
+    Pass pass;
+    pass.x = x.data();
+    pass.forces = forces.data();
+    pass.matrix = &matrix;
+    pass.stiffness_scale = stiffness_scale;
+    pass.mass_scale = mass_scale;
+    run_pass(pass);
+    project_fixed(fixed, matrix);
 }
 
 double CorotationalFem::strain_energy(CRef<VecX> x) const
 {
     double energy = 0.0;
     for (Index t = 0; t < num_tets(); ++t) {
-        const Mat3 f = gather_nodes(m_tets, t, x) * m_gradients[at(t)].transpose();
+        const Mat3 f = gather_nodes(m_tets, t, x.data()) * m_gradients[at(t)].transpose();
         const Mat3 r = polar_rotation_svd(f);
         const Mat3 s = r.transpose() * f;
         const Mat3 strain = 0.5 * (s + s.transpose()) - Mat3::Identity();
@@ -169,48 +345,17 @@ double CorotationalFem::strain_energy(CRef<VecX> x) const
 
 BsrMatrix CorotationalFem::make_matrix() const { return BsrMatrix(m_row_offsets, m_columns); }
 
-void CorotationalFem::assemble(double stiffness_scale, double mass_scale,
-                               const std::vector<char>& fixed, BsrMatrix& matrix) const
-{
-    const auto is_fixed = [&](Index v) { return !fixed.empty() && fixed[at(v)] != 0; };
-    tbb::parallel_for(
-        tbb::blocked_range<Index>(0, num_vertices(), ROW_GRAIN), [&](const tbb::blocked_range<Index>& range) {
-            for (Index r = range.begin(); r != range.end(); ++r) {
-                for (Index k = m_row_offsets[at(r)]; k < m_row_offsets[at(r) + 1]; ++k) {
-                    const Index c = m_columns[at(k)];
-                    auto block = matrix.block(k);
-                    if (is_fixed(r) || is_fixed(c)) {
-                        block = (r == c) ? Block3(Block3::Identity()) : Block3(Block3::Zero());
-                        continue;
-                    }
-                    Mat3 sum = Mat3::Zero();
-                    for (Index n = m_block_offsets[at(k)]; n < m_block_offsets[at(k) + 1]; ++n) {
-                        const Index contribution = m_block_contributions[at(n)];
-                        const Index t = contribution / 16;
-                        const Mat34& g = m_rotated_gradients[at(t)];
-                        sum += stiffness_block(g.col((contribution / 4) % 4), g.col(contribution % 4),
-                                               m_lambda, m_mu, m_volumes[at(t)]);
-                    }
-                    block = stiffness_scale * sum;
-                    if (r == c)
-                        block.diagonal().array() += mass_scale * m_masses[r];
-                }
-            }
-        });
-}
-
 VecX CorotationalFem::von_mises_stress(CRef<VecX> x) const
 {
     VecX stress(num_tets());
-    tbb::parallel_for(tbb::blocked_range<Index>(0, num_tets(), TET_GRAIN),
-                      [&](const tbb::blocked_range<Index>& range) {
-                          for (Index t = range.begin(); t != range.end(); ++t) {
-                              const Mat3 f = gather_nodes(m_tets, t, x) * m_gradients[at(t)].transpose();
-                              const Mat3 s = polar_rotation(f, m_rotations[at(t)]).transpose() * f;
-                              const Mat3 strain = 0.5 * (s + s.transpose()) - Mat3::Identity();
-                              stress[t] = von_mises(linear_stress(strain, m_lambda, m_mu));
-                          }
-                      });
+    tbb::parallel_for(tbb::blocked_range<Index>(0, num_tets(), TET_GRAIN), [&](const tbb::blocked_range<Index>& range) {
+        for (Index t = range.begin(); t != range.end(); ++t) {
+            const Mat3 f = gather_nodes(m_tets, t, x.data()) * m_gradients[at(t)].transpose();
+            const Mat3 s = polar_rotation(f, m_rotations[at(t)]).transpose() * f;
+            const Mat3 strain = 0.5 * (s + s.transpose()) - Mat3::Identity();
+            stress[t] = von_mises(linear_stress(strain, m_lambda, m_mu));
+        }
+    });
     return stress;
 }
 

@@ -1,6 +1,8 @@
 #include <corocontact/sim/body.hpp>
 
 #include <corocontact/core/error.hpp>
+#include <corocontact/partition/part_layout.hpp>
+#include <corocontact/partition/partition.hpp>
 
 namespace coro {
 
@@ -11,9 +13,25 @@ bool inside(const Vec3& p, const Vec3& min, const Vec3& max)
 }
 } // namespace
 
-Body::Body(TetMesh mesh, const BodySpec& spec)
-    : m_name(spec.name), m_mesh(std::move(mesh)), m_fem(m_mesh, spec.material),
-      m_rayleigh_mass(spec.rayleigh_mass), m_rayleigh_stiffness(spec.rayleigh_stiffness)
+Body::Partitioned Body::partition_mesh(const TetMesh& mesh, Index num_parts)
+{
+    const TetPartition partition = partition_tets(mesh.tets, mesh.num_vertices(), num_parts);
+    Partitioned result;
+    result.layout = make_part_layout(mesh.tets, mesh.num_vertices(), partition);
+    result.mesh = reorder_mesh(mesh, result.layout);
+    result.edge_cut = partition.edge_cut;
+    return result;
+}
+
+Body::Body(const TetMesh& mesh, const BodySpec& spec, Index num_parts)
+    : Body(partition_mesh(mesh, num_parts), spec)
+{
+}
+
+Body::Body(Partitioned&& partitioned, const BodySpec& spec)
+    : m_name(spec.name), m_edge_cut(partitioned.edge_cut), m_mesh(std::move(partitioned.mesh)),
+      m_fem(m_mesh, spec.material, std::move(partitioned.layout)), m_rayleigh_mass(spec.rayleigh_mass),
+      m_rayleigh_stiffness(spec.rayleigh_stiffness)
 {
     const Index n = m_mesh.num_vertices();
     m_positions = m_fem.rest_dofs();

@@ -39,9 +39,9 @@ PcgResult implicit_euler_step(Body& body, double dt, const Vec3& gravity, const 
     }
     VecX rhs(x.size());
     {
+        // Rotated stiffness and internal forces in one pass over the tets.
         ScopedTimer timer(times.assembly);
-        fem.assemble(dt * dt + dt * beta, 1.0 + dt * alpha, body.fixed(), body.system_matrix());
-        fem.internal_forces(x, rhs);
+        fem.assemble_with_forces(x, dt * dt + dt * beta, 1.0 + dt * alpha, body.fixed(), body.system_matrix(), rhs);
         rhs += body.load_forces();
         add_gravity(masses, gravity, rhs);
         rhs *= dt;

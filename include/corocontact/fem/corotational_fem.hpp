@@ -7,30 +7,37 @@
 /// shape gradients G_e = R_e g_e in closed form. Nothing 12×12 is stored or multiplied per
 /// element: K'_ij = V (λ G_i G_jᵀ + μ G_j G_iᵀ + μ (G_i·G_j) I).
 ///
-/// Assembly is a parallel gather: every stored block of the matrix sums its element
-/// contributions in ascending element order, so the result is bitwise independent of the
-/// thread count.
+/// The element loop runs part by part (METIS parts, see partition/part_layout.hpp) under TBB:
+/// each part adds its tets' blocks and forces straight into the rows of its interior nodes and
+/// into private buffers for interface rows, which are then summed in ascending part order. So
+/// the result depends on the partition but never on the thread count.
 
 #include <corocontact/core/material.hpp>
 #include <corocontact/core/tet_mesh.hpp>
 #include <corocontact/fem/tet_element.hpp>
+#include <corocontact/partition/part_layout.hpp>
 #include <corocontact/solver/bsr_matrix.hpp>
 
+#include <array>
 #include <vector>
 
 namespace coro {
 
 class CorotationalFem {
 public:
-    /// Precomputes shape gradients, volumes, lumped masses and the matrix pattern.
-    /// @param[in] mesh      positively oriented tets (see validate_and_orient)
+    /// Precomputes shape gradients, volumes, lumped masses, the matrix pattern and where every
+    /// tet's blocks go.
+    /// @param[in] mesh      positively oriented tets, in the layout's internal order
     /// @param[in] material  E, ν, ρ of the body
+    /// @param[in] layout    parts of the mesh (reorder_mesh applied to `mesh`); an empty layout
+    ///                      (num_parts = 0 offsets) means one part holding everything
     /// @throws NumericalError if a tet has non-positive rest volume
-    CorotationalFem(const TetMesh& mesh, const Material& material);
+    CorotationalFem(const TetMesh& mesh, const Material& material, PartLayout layout = {});
 
     Index num_vertices() const { return static_cast<Index>(m_rest.size() / 3); }
     Index num_tets() const { return static_cast<Index>(m_tets.rows()); }
     const Tets& tets() const { return m_tets; }
+    const PartLayout& layout() const { return m_layout; }
     /// Rest positions as DOFs, #3V [m].
     const VecX& rest_dofs() const { return m_rest; }
     /// Lumped mass ρV/4 summed per node, #V [kg].
@@ -40,8 +47,7 @@ public:
     double lambda() const { return m_lambda; }
     double mu() const { return m_mu; }
 
-    /// Computes R_e for every tet from positions `x` (#3V), warm-started from the previous R_e,
-    /// and the rotated gradients used by forces and assembly. Parallel over tets.
+    /// Computes R_e for every tet from positions `x` (#3V), warm-started from the previous R_e.
     /// @throws NumericalError naming the tet if its deformation gradient is not finite
     void update_rotations(CRef<VecX> x);
 
@@ -50,7 +56,7 @@ public:
 
     /// Internal forces f = f0 − K'x = −Σ_e R_e K_e (R_eᵀ x_e − X_e) with the current rotations.
     /// @param[in] x   #3V positions [m]
-    /// @param[out] f  #3V forces [N]
+    /// @param[out] f  #3V forces [N]; contiguous, must not alias x
     void internal_forces(CRef<VecX> x, Eigen::Ref<VecX> f);
 
     /// Co-rotated strain energy Σ V (μ ε:ε + λ/2 tr(ε)²), ε = sym(Rᵀ F) − I, with R evaluated
@@ -63,32 +69,57 @@ public:
     /// Fills `matrix` (from make_matrix) with stiffness_scale·K' + mass_scale·M with the current
     /// rotations; rows and columns of fixed nodes are replaced by identity (projection).
     /// @param[in] fixed  #V flags, non-zero for a fixed node (empty: none fixed)
-    void assemble(double stiffness_scale, double mass_scale, const std::vector<char>& fixed,
-                  BsrMatrix& matrix) const;
+    void assemble(double stiffness_scale, double mass_scale, const std::vector<char>& fixed, BsrMatrix& matrix);
+
+    /// assemble() and internal_forces() in one pass over the tets (current rotations).
+    void assemble_with_forces(CRef<VecX> x, double stiffness_scale, double mass_scale,
+                             const std::vector<char>& fixed, BsrMatrix& matrix, Eigen::Ref<VecX> forces);
 
     /// Von Mises stress of each tet in the co-rotated frame at positions `x` [Pa], #T.
     VecX von_mises_stress(CRef<VecX> x) const;
 
 private:
+    struct Pass {
+        const double* x = nullptr;    // #3V positions: rotations (if rotate) and forces
+        bool rotate = false;
+        double* forces = nullptr;     // #3V output, or null
+        BsrMatrix* matrix = nullptr;  // output, or null
+        double stiffness_scale = 0.0;
+        double mass_scale = 0.0;
+    };
+    void run_pass(const Pass& pass);
+    void part_pass(Index part, const Pass& pass);
+    void reduce_interfaces(const Pass& pass);
+    static void project_fixed(const std::vector<char>& fixed, BsrMatrix& matrix);
+
     Tets m_tets;
+    PartLayout m_layout;
     VecX m_rest;
     VecX m_masses;
     std::vector<double> m_volumes;
-    std::vector<Mat34> m_gradients;         // rest g_0..g_3 per tet
-    std::vector<Mat3> m_rotations;          // R_e
-    std::vector<Mat34> m_rotated_gradients; // G_e = R_e g_e
-    std::vector<Mat34> m_force_slots;       // per-tet forces before the gather
+    std::vector<Mat34> m_gradients; // rest g_0..g_3 per tet
+    std::vector<Mat3> m_rotations;  // R_e
     double m_lambda = 0.0;
     double m_mu = 0.0;
 
-    // node → (tet·4 + corner), ascending, for the force gather
-    std::vector<Index> m_node_offsets;
-    std::vector<Index> m_node_corners;
-    // block pattern and, per stored block, its contributions (tet·16 + 4i + j), ascending
+    // Pattern of the matrix.
     std::vector<Index> m_row_offsets;
     std::vector<Index> m_columns;
-    std::vector<Index> m_block_offsets;
-    std::vector<Index> m_block_contributions;
+    // Where tet t's block (i, j) goes: ≥ 0 a block of the matrix (interior row), < 0 the
+    // interface buffer entry −1 − target. Likewise for the 4 corner forces.
+    std::vector<std::array<Index, 16>> m_block_targets;
+    std::vector<std::array<Index, 4>> m_force_targets;
+    // Interface buffers, part by part, and per interface block / node the buffer entries to
+    // sum, in ascending part order.
+    std::vector<double> m_block_buffer;  // 9 per entry
+    std::vector<double> m_force_buffer;  // 3 per entry
+    std::vector<Index> m_part_block_buffer_offsets; // #parts+1
+    std::vector<Index> m_part_force_buffer_offsets; // #parts+1
+    std::vector<Index> m_interface_blocks;          // matrix block of each interface block
+    std::vector<Index> m_interface_block_offsets;   // into m_interface_block_entries
+    std::vector<Index> m_interface_block_entries;
+    std::vector<Index> m_interface_force_offsets;   // per interface node, into entries
+    std::vector<Index> m_interface_force_entries;
 };
 
 } // namespace coro

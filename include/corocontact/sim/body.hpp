@@ -16,13 +16,26 @@ namespace coro {
 class Body {
 public:
     /// Builds a body from its mesh (already transformed and oriented) and the case's settings.
-    /// @param[in] mesh  positively oriented tets, positions after the body transform [m]
-    /// @param[in] spec  material, damping, initial velocity, fixed regions and box loads
+    /// The mesh is split into `num_parts` METIS parts and renumbered internally (see
+    /// partition/part_layout.hpp): every index a Body takes or returns is internal;
+    /// input_node() and input_tet() map back to the input's order.
+    /// @param[in] mesh       positively oriented tets, positions after the body transform [m]
+    /// @param[in] spec       material, damping, initial velocity, fixed regions and box loads
+    /// @param[in] num_parts  parts of the parallel element loop, ≥ 1
     /// @throws InputError naming spec.location if a fixed or load box contains no node
-    Body(TetMesh mesh, const BodySpec& spec);
+    Body(const TetMesh& mesh, const BodySpec& spec, Index num_parts = 1);
 
     const std::string& name() const { return m_name; }
+    /// The mesh in internal order.
     const TetMesh& mesh() const { return m_mesh; }
+    /// Input (file) index of internal node v.
+    Index input_node(Index v) const { return m_fem.layout().new_to_old_node[static_cast<std::size_t>(v)]; }
+    /// Input (file) index of internal tet t.
+    Index input_tet(Index t) const { return m_fem.layout().new_to_old_tet[static_cast<std::size_t>(t)]; }
+    /// METIS part of internal tet t.
+    Index part_of_tet(Index t) const { return m_fem.layout().tet_part[static_cast<std::size_t>(t)]; }
+    /// Faces shared by tets of different parts.
+    Index edge_cut() const { return m_edge_cut; }
     CorotationalFem& fem() { return m_fem; }
     const CorotationalFem& fem() const { return m_fem; }
     Index num_vertices() const { return m_mesh.num_vertices(); }
@@ -56,7 +69,16 @@ public:
     void project_fixed(Eigen::Ref<VecX> dofs) const;
 
 private:
+    struct Partitioned {
+        TetMesh mesh;
+        PartLayout layout;
+        Index edge_cut = 0;
+    };
+    static Partitioned partition_mesh(const TetMesh& mesh, Index num_parts);
+    Body(Partitioned&& partitioned, const BodySpec& spec);
+
     std::string m_name;
+    Index m_edge_cut = 0;
     TetMesh m_mesh;
     CorotationalFem m_fem;
     VecX m_positions;
