@@ -21,10 +21,10 @@ Mat3 polar_rotation_svd(const Mat3& f);
 
 /// The same rotation found iteratively from a nearby rotation: R = guess · polar(guessᵀ F),
 /// the inner polar factor by Newton's iteration X ← (X + X⁻ᵀ)/2, which converges
-/// quadratically (two to four iterations when `guess` is last step's rotation). Falls back to
-/// the SVD for inverted or nearly singular guessᵀF, or when the iteration does not reach
-/// `tolerance` (Frobenius norm of the last update) within 30 iterations.
+/// quadratically (two or three iterations when `guess` is last step's rotation). Stops when
+/// the error left, about the square of the last update's Frobenius norm, is below `tolerance`;
+/// falls back to the SVD for inverted or nearly singular guessᵀF, or after 30 iterations.
 /// @throws NumericalError if F has a non-finite entry
-Mat3 polar_rotation(const Mat3& f, const Mat3& guess, double tolerance = 1e-13);
+Mat3 polar_rotation(const Mat3& f, const Mat3& guess, double tolerance = 1e-15);
 
 } // namespace coro
