@@ -11,6 +11,8 @@
 #include <corocontact/io/scene_loader.hpp>
 #include <corocontact/io/scene_output.hpp>
 #include <corocontact/io/vtk_series.hpp>
+#include <corocontact/partition/part_layout.hpp>
+#include <corocontact/partition/partition.hpp>
 
 #include <CLI/CLI.hpp>
 #include <tbb/global_control.h>
@@ -101,7 +103,7 @@ int run_case(const RunOptions& options)
     return 0;
 }
 
-int describe_mesh(const std::string& path)
+int describe_mesh(const std::string& path, int parts)
 {
     coro::TetMesh mesh = coro::read_tet_mesh(path);
     const coro::Index reoriented = coro::validate_and_orient(mesh, path);
@@ -125,6 +127,18 @@ int describe_mesh(const std::string& path)
     std::printf("  surface %s (open edges %d, non-manifold edges %d, misoriented edges %d)\n",
                 check.closed_and_oriented() ? "closed and oriented" : "NOT closed and oriented",
                 check.open_edges, check.nonmanifold_edges, check.misoriented_edges);
+    if (parts > 0) {
+        const coro::TetPartition partition = coro::partition_tets(mesh.tets, mesh.num_vertices(), parts);
+        const coro::PartLayout layout = coro::make_part_layout(mesh.tets, mesh.num_vertices(), partition);
+        const std::vector<coro::Index> sizes = partition.part_sizes();
+        std::printf("  METIS parts %d: edge-cut %d faces (%.2f%% of interior faces), balance %.4f (largest/mean), "
+                    "tets per part %d..%d, interface nodes %d (%.1f%%)\n",
+                    partition.num_parts, partition.edge_cut,
+                    100.0 * partition.edge_cut / std::max<double>(1.0, (4.0 * mesh.num_tets() - faces.rows()) / 2.0),
+                    partition.imbalance(), *std::min_element(sizes.begin(), sizes.end()),
+                    *std::max_element(sizes.begin(), sizes.end()), layout.num_interface_nodes(),
+                    100.0 * layout.num_interface_nodes() / mesh.num_vertices());
+    }
     return 0;
 }
 
@@ -151,6 +165,9 @@ int main(int argc, char** argv)
     std::string mesh_path;
     CLI::App* info_command = app.add_subcommand("info", "counts, volume, quality and surface check of a mesh");
     info_command->add_option("mesh", mesh_path, "tet mesh file")->required();
+    int parts = 0;
+    info_command->add_option("--parts", parts, "also partition into K METIS parts: edge-cut and balance")
+        ->check(CLI::PositiveNumber);
     info_command->set_version_flag("--version", std::string("corocontact ") + CORO_VERSION);
 
     try {
@@ -167,7 +184,7 @@ int main(int argc, char** argv)
     try {
         if (run_command->parsed())
             return run_case(run);
-        return describe_mesh(mesh_path);
+        return describe_mesh(mesh_path, parts);
     } catch (const coro::InputError& error) {
         std::cerr << "error: " << error.what() << "\n";
         return EXIT_BAD_INPUT;

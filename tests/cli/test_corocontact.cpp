@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <vtkCellData.h>
+#include <vtkDataArray.h>
 #include <vtkCompositeDataSet.h>
 #include <vtkDataSet.h>
 #include <vtkInformation.h>
@@ -170,6 +171,97 @@ TEST(CorocontactRun, StepsAndThreadsOptions)
     EXPECT_EQ(run("run", dir).exit_code, 2);
 }
 
+TEST(CorocontactRun, OneAndTwoThreadsWriteIdenticalFiles)
+{
+    // Two partitioned bodies (a mesh file and a sphere), dynamic, gravity and damping.
+    const fs::path dir = coro::test::scratch_dir("cli_threads");
+    const std::string text = std::string(R"toml([simulation]
+dt = 0.01
+steps = 6
+output_every = 3
+gravity = [0.0, -9.81, 0.0]
+
+[solver]
+max_iterations = 15
+parts_per_thread = 4
+
+[[body]]
+name = "cube"
+mesh = ")toml") + CORO_TEST_DATA_DIR + R"toml(/msh/cube_v41.msh"
+young = 1e4
+rayleigh_stiffness = 0.01
+
+[[body.fixed]]
+min = [-10.0, -10.0, -10.0]
+max = [0.01, 10.0, 10.0]
+
+[[body]]
+name = "ball"
+shape = "sphere"
+center = [0.0, 3.0, 0.0]
+radius = 0.5
+resolution = 12
+velocity = [1.0, 0.0, 0.0]
+young = 2e4
+)toml";
+    const fs::path case_file = coro::test::write_text(dir / "threads.toml", text);
+    for (const char* threads : {"1", "2"}) {
+        const Outcome outcome = run("run " + case_file.string() + " --quiet --threads " + threads + " --out " +
+                                        (dir / ("t" + std::string(threads))).string(),
+                                    dir);
+        ASSERT_EQ(outcome.exit_code, 0) << outcome.err;
+    }
+    int compared = 0;
+    for (const auto& entry : fs::recursive_directory_iterator(dir / "t1")) {
+        if (!entry.is_regular_file() || entry.path().extension() == ".json")
+            continue;
+        const fs::path other = dir / "t2" / fs::relative(entry.path(), dir / "t1");
+        ASSERT_TRUE(fs::exists(other)) << other;
+        EXPECT_EQ(slurp(entry.path()), slurp(other)) << entry.path();
+        ++compared;
+    }
+    EXPECT_EQ(compared, 1 + 3 + 3 * 2); // pvd, 3 vtm, 3 × 2 vtu
+}
+
+TEST(CorocontactRun, FramePointsKeepTheMeshFileNodeOrder)
+{
+    const fs::path dir = coro::test::scratch_dir("cli_order");
+    const std::string mesh = std::string(CORO_TEST_DATA_DIR) + "/msh/cube_v22.msh";
+    const fs::path case_file = coro::test::write_text(dir / "order.toml", std::string(R"toml([simulation]
+steps = 1
+[solver]
+parts_per_thread = 8
+[[body]]
+name = "cube"
+mesh = ")toml") + mesh + "\"\n");
+    ASSERT_EQ(run("run " + case_file.string() + " --quiet --out " + (dir / "o").string(), dir).exit_code, 0);
+    vtkNew<vtkXMLMultiBlockDataReader> reader;
+    reader->SetFileName((dir / "o" / "order_000000.vtm").string().c_str());
+    reader->Update();
+    auto* grid = vtkUnstructuredGrid::SafeDownCast(vtkMultiBlockDataSet::SafeDownCast(reader->GetOutput())->GetBlock(0));
+    ASSERT_NE(grid, nullptr);
+    // MSH 2.2 node lines "tag x y z" in file order.
+    std::ifstream file(mesh);
+    std::string line;
+    while (std::getline(file, line) && line.rfind("$Nodes", 0) != 0) {
+    }
+    long count = 0;
+    file >> count;
+    ASSERT_EQ(grid->GetNumberOfPoints(), count);
+    for (long i = 0; i < count; ++i) {
+        long tag = 0;
+        double p[3];
+        file >> tag >> p[0] >> p[1] >> p[2];
+        double q[3];
+        grid->GetPoint(i, q);
+        for (int d = 0; d < 3; ++d)
+            ASSERT_EQ(q[d], p[d]) << "node " << i;
+    }
+    auto* partition = grid->GetCellData()->GetArray("partition");
+    ASSERT_NE(partition, nullptr);
+    EXPECT_GT(partition->GetRange()[1], 0.0); // really partitioned
+}
+
 TEST(CorocontactInfo, DescribesAMesh)
 {
     const fs::path dir = coro::test::scratch_dir("cli_info");
@@ -177,6 +269,9 @@ TEST(CorocontactInfo, DescribesAMesh)
     ASSERT_EQ(outcome.exit_code, 0) << outcome.err;
     EXPECT_THAT(outcome.out, HasSubstr("nodes 76, tets 172"));
     EXPECT_THAT(outcome.out, HasSubstr("closed and oriented"));
+    const Outcome parts = run(std::string("info ") + CORO_TEST_DATA_DIR + "/msh/cube_v41.msh --parts 3", dir);
+    ASSERT_EQ(parts.exit_code, 0) << parts.err;
+    EXPECT_THAT(parts.out, HasSubstr("METIS parts 3: edge-cut"));
     EXPECT_EQ(run("info " + (dir / "absent.msh").string(), dir).exit_code, 2);
 }
 

@@ -31,7 +31,7 @@ TetPartition partition_tets(const Tets& tets, Index num_vertices, Index num_part
 
 /// Default number of parts of a body: `parts_per_thread` × the machine's cores (the process's
 /// default TBB concurrency, which --threads does not change, so 1 and 2 threads partition
-/// alike and give identical results), at most one part per 500 tets, at least 1.
+/// alike and give identical results), at most one part per 64 tets, at least 1.
 Index default_num_parts(Index num_tets, Index parts_per_thread);
 
 } // namespace coro
