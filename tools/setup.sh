@@ -24,7 +24,7 @@ packages=(
   libeigen3-dev libtbb-dev libmetis-dev libembree-dev
   libvtk9-dev libcli11-dev libtomlplusplus-dev
   libgtest-dev libgmock-dev libbenchmark-dev
-  calculix-ccx
+  calculix-ccx python3-matplotlib
 )
 
 missing=()
