@@ -210,23 +210,33 @@ void CorotationalFem::part_pass(Index part, const Pass& pass)
             }
         }
         if (values) {
+            // K'_ij = s V (λ G_i G_jᵀ + μ G_j G_iᵀ + μ (G_i·G_j) I); entry (a, b) is
+            // λG_i[a]·G_j[b] + μG_j[a]·G_i[b] (+ the diagonal term): two products per entry
+            // with the gradients pre-scaled. K'_ji = K'_ijᵀ is added from the same numbers.
             const double s = pass.stiffness_scale * volume;
-            const double ls = s * m_lambda, ms = s * m_mu;
+            const Mat34 lg = (s * m_lambda) * rg, mg = (s * m_mu) * rg;
             const auto& targets = m_block_targets[at(t)];
             for (int i = 0; i < 4; ++i)
                 for (int j = i; j < 4; ++j) {
-                    const Vec3 gi = rg.col(i), gj = rg.col(j);
-                    const double diagonal = ms * gi.dot(gj);
+                    const double* gi = rg.col(i).data();
+                    const double* gj = rg.col(j).data();
+                    const double* li = lg.col(i).data();
+                    const double* mj = mg.col(j).data();
+                    const double d = mj[0] * gi[0] + mj[1] * gi[1] + mj[2] * gi[2];
+                    const double k[9] = {li[0] * gj[0] + mj[0] * gi[0] + d, li[0] * gj[1] + mj[0] * gi[1],
+                                         li[0] * gj[2] + mj[0] * gi[2],     li[1] * gj[0] + mj[1] * gi[0],
+                                         li[1] * gj[1] + mj[1] * gi[1] + d, li[1] * gj[2] + mj[1] * gi[2],
+                                         li[2] * gj[0] + mj[2] * gi[0],     li[2] * gj[1] + mj[2] * gi[1],
+                                         li[2] * gj[2] + mj[2] * gi[2] + d};
                     double* kij = block_slot(targets[at(4 * i + j)]);
-                    for (int a = 0; a < 3; ++a)
-                        for (int b = 0; b < 3; ++b)
-                            kij[3 * a + b] += ls * gi[a] * gj[b] + ms * gj[a] * gi[b] + (a == b ? diagonal : 0.0);
+                    for (int e = 0; e < 9; ++e)
+                        kij[e] += k[e];
                     if (j == i)
                         continue;
                     double* kji = block_slot(targets[at(4 * j + i)]);
-                    for (int a = 0; a < 3; ++a)
-                        for (int b = 0; b < 3; ++b)
-                            kji[3 * b + a] += ls * gi[a] * gj[b] + ms * gj[a] * gi[b] + (a == b ? diagonal : 0.0);
+                    kji[0] += k[0], kji[1] += k[3], kji[2] += k[6];
+                    kji[3] += k[1], kji[4] += k[4], kji[5] += k[7];
+                    kji[6] += k[2], kji[7] += k[5], kji[8] += k[8];
                 }
         }
     }
