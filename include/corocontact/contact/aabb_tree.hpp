@@ -53,6 +53,7 @@ public:
     /// through `point` along `axis` (0 = x, 1 = y, 2 = z), i.e. whose box contains `point`
     /// in the two other coordinates (closed, grown by `tolerance`).
     ///
+    /// The face boxes are the bounding rectangles of Eq. 4 (closed here, grown by `tolerance`).
     /// `visit` either returns void (every such face is visited) or a double, the largest
     /// distance along the axis still of interest: subtrees whose boxes lie farther than the
     /// smallest value returned so far from `point` along the axis are skipped. Children are
@@ -84,12 +85,30 @@ private:
         Index begin = 0;   ///< leaf: range in m_order
         Index end = 0;
     };
+    /// Traversal copy of a node in single precision, rounded outward (so it bounds the exact
+    /// box); siblings sit next to each other, a pair in one cache line.
+    struct alignas(32) PackedNode {
+        float min[3];
+        float max[3];
+        Index link;  ///< internal: packed index of the left child (the right one follows);
+                     ///< leaf: first slot in m_order
+        Index count; ///< leaf: number of faces (> 0); internal: 0
+    };
+    struct PackedBox {
+        float min[3];
+        float max[3];
+    };
     void refit_node(CRef<Positions> vertices, Index n);
+    static void pack(const Aabb& box, float* min, float* max);
 
-    std::vector<Node> m_nodes;      // root at 0, depth-first preorder
+    std::vector<Node> m_nodes;      // root at 0; children after their parent
     std::vector<Index> m_order;     // faces in leaf order
+    std::vector<Aabb> m_face_boxes; // box of face m_order[i], refit with the nodes
     std::vector<Index> m_levels;    // nodes grouped by height (leaves first) for the parallel refit
     std::vector<Index> m_level_offsets;
+    std::vector<PackedNode> m_packed;   // root at 0, slot 1 unused, sibling pairs from 2 on
+    std::vector<Index> m_packed_of;     // m_nodes index → m_packed index
+    std::vector<PackedBox> m_packed_faces; // m_face_boxes rounded outward to float
     std::vector<Index> m_vertex_order;  // used vertices, first appearance in leaf order
     std::vector<Aabb> m_vertex_blocks;  // box of each VERTEX_BLOCK consecutive m_vertex_order entries
     Tris m_faces;
@@ -98,23 +117,43 @@ private:
 template <class Visit>
 void AabbTree::faces_on_axis_line(const Vec3& point, int axis, double tolerance, Visit&& visit) const
 {
-    if (m_nodes.empty())
+    if (m_packed.empty())
         return;
     const int u = (axis + 1) % 3, v = (axis + 2) % 3;
     const double pu = point[u], pv = point[v], pa = point[axis];
+    // Branch-free tests: their outcomes are hard to predict. Single precision boxes are rounded
+    // outward, so they never reject what the exact box would accept.
+    const auto crossed = [&](const float* lo, const float* hi) {
+        return (pu >= lo[u] - tolerance) & (pu <= hi[u] + tolerance) & (pv >= lo[v] - tolerance) &
+               (pv <= hi[v] + tolerance);
+    };
+    const auto gap = [&](const float* lo, const float* hi) {
+        return std::max(std::max(static_cast<double>(lo[axis]) - pa, pa - static_cast<double>(hi[axis])), 0.0);
+    };
+    const PackedNode& root = m_packed.front();
+    if (!crossed(root.min, root.max))
+        return;
     double cutoff = std::numeric_limits<double>::infinity();
-    const auto gap = [&](const Aabb& b) { return std::max({b.min[axis] - pa, pa - b.max[axis], 0.0}); };
+    // Only nodes whose box the line crosses are pushed, with their distance along the axis.
     Index stack[96];
+    double stack_gap[96];
     int top = 0;
-    stack[top++] = 0;
+    stack[top] = 0;
+    stack_gap[top++] = gap(root.min, root.max);
     while (top > 0) {
-        const Node& node = m_nodes[static_cast<std::size_t>(stack[--top])];
-        const Aabb& b = node.box;
-        if (pu < b.min[u] - tolerance || pu > b.max[u] + tolerance || pv < b.min[v] - tolerance ||
-            pv > b.max[v] + tolerance || gap(b) > cutoff)
+        --top;
+        if (stack_gap[top] > cutoff)
             continue;
-        if (node.left < 0) {
-            for (Index i = node.begin; i < node.end; ++i) {
+        const PackedNode& node = m_packed[static_cast<std::size_t>(stack[top])];
+        if (node.count > 0) {
+            for (Index i = node.link; i < node.link + node.count; ++i) {
+                const PackedBox& pb = m_packed_faces[static_cast<std::size_t>(i)];
+                if (!crossed(pb.min, pb.max) || gap(pb.min, pb.max) > cutoff)
+                    continue;
+                const Aabb& fb = m_face_boxes[static_cast<std::size_t>(i)]; // the exact test
+                if (pu < fb.min[u] - tolerance || pu > fb.max[u] + tolerance || pv < fb.min[v] - tolerance ||
+                    pv > fb.max[v] + tolerance)
+                    continue;
                 const Index face = m_order[static_cast<std::size_t>(i)];
                 if constexpr (std::is_void_v<decltype(visit(face))>)
                     visit(face);
@@ -123,15 +162,18 @@ void AabbTree::faces_on_axis_line(const Vec3& point, int axis, double tolerance,
             }
             continue;
         }
-        const double gl = gap(m_nodes[static_cast<std::size_t>(node.left)].box);
-        const double gr = gap(m_nodes[static_cast<std::size_t>(node.right)].box);
-        if (gl <= gr) { // nearer child on top of the stack
-            stack[top++] = node.right;
-            stack[top++] = node.left;
-        } else {
-            stack[top++] = node.left;
-            stack[top++] = node.right;
-        }
+        const PackedNode& l = m_packed[static_cast<std::size_t>(node.link)];
+        const PackedNode& r = m_packed[static_cast<std::size_t>(node.link) + 1];
+        const bool cl = crossed(l.min, l.max), cr = crossed(r.min, r.max);
+        const double gl = gap(l.min, l.max), gr = gap(r.min, r.max);
+        // Farther child first, the nearer one on top; a child the line misses is written, not kept.
+        const bool left_near = gl <= gr;
+        stack[top] = left_near ? node.link + 1 : node.link;
+        stack_gap[top] = left_near ? gr : gl;
+        top += left_near ? cr : cl;
+        stack[top] = left_near ? node.link : node.link + 1;
+        stack_gap[top] = left_near ? gl : gr;
+        top += left_near ? cl : cr;
     }
 }
 

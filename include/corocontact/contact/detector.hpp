@@ -5,6 +5,7 @@
 #include <corocontact/contact/axis_ray.hpp>
 #include <corocontact/contact/contact_surface.hpp>
 
+#include <functional>
 #include <vector>
 
 namespace coro {
@@ -26,18 +27,52 @@ struct DetectionStats {
     Index candidate_vertices = 0; ///< vertex queries done (both directions)
     Index inside = 0;
     Index winding_fallbacks = 0; ///< exact mode: vertices undecided on all three axes
+    Index on_surface = 0;        ///< exact mode: vertices lying on the other surface (not inside)
 };
 
 struct DetectionSettings {
     DetectionMode mode = DetectionMode::EXACT;
     AxisRayTolerances tolerances;
+    /// Compute depth, normal, face and barycentric weights of every inside vertex (a nearest-point
+    /// query each). When false those fields keep their defaults (depth 0, face −1): enough for
+    /// inside/outside counts and cross-checks.
+    bool contact_data = true;
 };
 
 /// Detects every surface vertex of every body that lies inside another body, for all
 /// overlapping pairs in both directions. Pairs and the vertices of large pairs run as TBB
 /// tasks; the result is sorted by (body, vertex, other), so it does not depend on scheduling.
+/// Vertices lying exactly on the other surface (touching bodies) are not inside (exact mode;
+/// see inside_test).
 /// @param[in] surfaces  one per body, trees refit to the current positions
 std::vector<ContactPoint> detect_contacts(const std::vector<ContactSurface>& surfaces,
                                           const DetectionSettings& settings, DetectionStats* stats = nullptr);
+
+/// The same pipeline (broad phase, mid phase, parallel vertex loop, depth and normal, sorted
+/// output, stats) with the inside test supplied by the caller, e.g. the Embree backend.
+/// @param[in] inside  inside(other, point): is `point` inside surface `other`; called
+///                    concurrently from several threads
+std::vector<ContactPoint> detect_contacts(const std::vector<ContactSurface>& surfaces,
+                                          const std::function<InsideTest(Index other, const Vec3& point)>& inside,
+                                          DetectionStats* stats = nullptr, bool contact_data = true);
+
+/// Mid phase of one ordered pair: the vertices of `body` to test against surface `other`.
+struct PairCandidates {
+    Index body = -1;
+    Index other = -1;
+    Aabb overlap;                ///< I = AABB(body) ∩ AABB(other)
+    std::vector<Index> vertices; ///< surface vertices of `body` inside I (closed), in the tree's
+                                 ///< spatial order
+    std::vector<Index> faces;    ///< paper mode only: faces of `other` with at least one vertex in
+                                 ///< I, ascending (the paper's candidate faces)
+};
+
+/// Broad phase (body boxes from the trees, sort-and-sweep) and mid phase of all overlapping
+/// pairs, both directions, ordered by (body, other).
+std::vector<PairCandidates> contact_candidates(const std::vector<ContactSurface>& surfaces, DetectionMode mode);
+
+/// The contact data of vertex `vertex` of `body` found inside `other`: nearest point of the
+/// other surface (AabbTree::nearest), its distance as depth, its face's outward unit normal.
+ContactPoint make_contact_point(const std::vector<ContactSurface>& surfaces, Index body, Index vertex, Index other);
 
 } // namespace coro

@@ -1,0 +1,305 @@
+#include <corocontact/contact/axis_ray.hpp>
+
+#include <corocontact/contact/winding_number.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace coro {
+
+namespace {
+
+constexpr double EPS = std::numeric_limits<double>::epsilon();
+constexpr double INF = std::numeric_limits<double>::infinity();
+// Rounding bounds, relative to the sum of the absolute products (Shewchuk's static filters
+// ccwerrboundA ≈ 3ε/2 and o3derrboundA ≈ 7ε/2, ε = 2^-53, taken with a safety factor).
+constexpr double ORIENT2D_BOUND = 3.0 * EPS;
+constexpr double ORIENT3D_BOUND = 8.0 * EPS;
+
+/// One face against the axis line of a point (exact modes).
+struct FaceHit {
+    enum Kind : unsigned char { MISS, CLEAN, EDGE, PARALLEL };
+    Kind kind;
+    bool vote;       ///< d·n > 0: the point is on the inner side of the face's plane
+    bool on_surface; ///< the point is on the face (its plane within rounding, its projection)
+    double distance; ///< |t|, or for PARALLEL the gap to the face's extent along the axis
+    double bound;    ///< rounding bound of `distance`
+};
+constexpr FaceHit MISSED{FaceHit::MISS, false, false, 0.0, 0.0};
+
+struct Frame {
+    int a, u, v;
+    double pa, pu, pv;
+};
+
+Frame frame_of(const Vec3& p, int axis)
+{
+    const int u = (axis + 1) % 3, v = (axis + 2) % 3;
+    return {axis, u, v, p[axis], p[u], p[v]};
+}
+
+/// Eq. 4–6 in exact arithmetic's terms: the signed sub-areas w_i = A_i (twice the area) of the
+/// point's projection with each projected edge; the projection is inside when all have the sign
+/// of Af = n_axis. Each sign is trusted only beyond its rounding bound (plus `edge_relative`·|Af|).
+FaceHit classify_exact(const double* A, const double* B, const double* C, const Frame& f,
+                       const AxisRayTolerances& tol)
+{
+    FaceHit hit = MISSED;
+    const double au = A[f.u] - f.pu, av = A[f.v] - f.pv;
+    const double bu = B[f.u] - f.pu, bv = B[f.v] - f.pv;
+    const double cu = C[f.u] - f.pu, cv = C[f.v] - f.pv;
+    const double w0 = bu * cv - bv * cu, e0 = ORIENT2D_BOUND * (std::abs(bu * cv) + std::abs(bv * cu));
+    const double w1 = cu * av - cv * au, e1 = ORIENT2D_BOUND * (std::abs(cu * av) + std::abs(cv * au));
+    const double w2 = au * bv - av * bu, e2 = ORIENT2D_BOUND * (std::abs(au * bv) + std::abs(av * bu));
+
+    // Face normal n = (B − A) × (C − A); n_a is the projected (doubled) area Af.
+    const double d1[3] = {B[0] - A[0], B[1] - A[1], B[2] - A[2]};
+    const double d2[3] = {C[0] - A[0], C[1] - A[1], C[2] - A[2]};
+    const double p0 = d1[1] * d2[2], p1 = d1[2] * d2[1];
+    const double p2 = d1[2] * d2[0], p3 = d1[0] * d2[2];
+    const double p4 = d1[0] * d2[1], p5 = d1[1] * d2[0];
+    const double n[3] = {p0 - p1, p2 - p3, p4 - p5};
+    const double perm[3] = {std::abs(p0) + std::abs(p1), std::abs(p2) + std::abs(p3), std::abs(p4) + std::abs(p5)};
+    const double na = n[f.a];
+    const double na_bound = ORIENT2D_BOUND * perm[f.a];
+    const double n_norm = std::abs(n[0]) + std::abs(n[1]) + std::abs(n[2]);
+
+    if (std::abs(na) <= std::max(tol.parallel_relative * n_norm, na_bound)) {
+        // Parallel (or degenerate) face: met when the point's projection is on the thin projected
+        // triangle, for either orientation, within rounding.
+        const bool met_pos = w0 >= -e0 && w1 >= -e1 && w2 >= -e2;
+        const bool met_neg = w0 <= e0 && w1 <= e1 && w2 <= e2;
+        if (!met_pos && !met_neg)
+            return hit;
+        hit.kind = FaceHit::PARALLEL;
+        const double lo = std::min({A[f.a], B[f.a], C[f.a]}), hi = std::max({A[f.a], B[f.a], C[f.a]});
+        hit.distance = std::max({lo - f.pa, f.pa - hi, 0.0});
+        return hit;
+    }
+    const double s = na > 0.0 ? 1.0 : -1.0;
+    const double margin = tol.edge_relative * std::abs(na);
+    const double s0 = s * w0, s1 = s * w1, s2 = s * w2;
+    if (s0 < -(e0 + margin) || s1 < -(e1 + margin) || s2 < -(e2 + margin))
+        return hit;
+    const bool clean = s0 > e0 + margin && s1 > e1 + margin && s2 > e2 + margin;
+    hit.kind = clean ? FaceHit::CLEAN : FaceHit::EDGE;
+
+    // num = n·(A − p); t = num / n_a is the crossing's coordinate along the axis minus the
+    // point's; d·n = sign(t)·n_a has the sign of num.
+    double qa[3];
+    qa[f.a] = A[f.a] - f.pa;
+    qa[f.u] = au;
+    qa[f.v] = av;
+    const double num = n[0] * qa[0] + n[1] * qa[1] + n[2] * qa[2];
+    const double num_bound =
+        ORIENT3D_BOUND * (perm[0] * std::abs(qa[0]) + perm[1] * std::abs(qa[1]) + perm[2] * std::abs(qa[2]));
+    const double t = std::abs(num / na);
+    hit.distance = t;
+    hit.bound = 1.01 * ((num_bound + t * na_bound) / (std::abs(na) - na_bound) + EPS * t);
+    hit.vote = num > 0.0;
+    hit.on_surface = std::abs(num) <= num_bound && s0 >= -e0 && s1 >= -e1 && s2 >= -e2;
+    return hit;
+}
+
+/// The competing crossings of one axis: keeps those that can still be within the cutoff.
+class AxisHits {
+public:
+    explicit AxisHits(double tie_relative) : m_tie(1.0 + tie_relative) {}
+
+    /// Largest distance along the axis still of interest.
+    double cutoff() const { return m_closest * m_tie; }
+
+    void add(const FaceHit& h)
+    {
+        if (h.kind == FaceHit::MISS)
+            return;
+        m_any = true;
+        if (h.kind != FaceHit::PARALLEL)
+            m_closest = std::min(m_closest, h.distance + h.bound);
+        if (lower(h) > cutoff())
+            return;
+        if (m_count == CAPACITY) {
+            compact();
+            if (m_count == CAPACITY) {
+                m_overflow = true;
+                return;
+            }
+        }
+        m_hits[m_count++] = h;
+    }
+
+    AxisOutcome decide() const
+    {
+        if (!m_any)
+            return AxisOutcome::NO_HIT;
+        const double cut = cutoff();
+        bool degenerate = m_overflow || m_closest == INF;
+        int votes[2] = {0, 0};
+        for (int i = 0; i < m_count; ++i) {
+            const FaceHit& h = m_hits[i];
+            if (lower(h) > cut)
+                continue;
+            if (h.on_surface)
+                return AxisOutcome::ON_SURFACE;
+            if (h.kind != FaceHit::CLEAN)
+                degenerate = true;
+            else
+                ++votes[h.vote ? 1 : 0];
+        }
+        if (degenerate || (votes[0] > 0 && votes[1] > 0) || votes[0] + votes[1] == 0)
+            return AxisOutcome::DEGENERATE;
+        return votes[1] > 0 ? AxisOutcome::INSIDE : AxisOutcome::OUTSIDE;
+    }
+
+private:
+    static double lower(const FaceHit& h) { return h.distance - h.bound; }
+    void compact()
+    {
+        const double cut = cutoff();
+        int kept = 0;
+        for (int i = 0; i < m_count; ++i)
+            if (lower(m_hits[i]) <= cut)
+                m_hits[kept++] = m_hits[i];
+        m_count = kept;
+    }
+
+    static constexpr int CAPACITY = 32;
+    FaceHit m_hits[CAPACITY]; // NOLINT: filled up to m_count only
+    int m_count = 0;
+    bool m_any = false;
+    bool m_overflow = false;
+    double m_closest = INF;
+    double m_tie;
+};
+
+const double* vertex_ptr(const ContactSurface& s, Index v) { return s.vertices.data() + 3 * static_cast<std::ptrdiff_t>(v); }
+
+AxisOutcome axis_test_exact(const ContactSurface& surface, const Vec3& point, int axis,
+                            const AxisRayTolerances& tol)
+{
+    const Frame f = frame_of(point, axis);
+    AxisHits hits(tol.tie_relative);
+    const Tris& faces = surface.faces;
+    surface.tree.faces_on_axis_line(point, axis, 0.0, [&](Index face) {
+        hits.add(classify_exact(vertex_ptr(surface, faces(face, 0)), vertex_ptr(surface, faces(face, 1)),
+                                vertex_ptr(surface, faces(face, 2)), f, tol));
+        return hits.cutoff();
+    });
+    return hits.decide();
+}
+
+AxisOutcome axis_test_brute_force(const ContactSurface& surface, const Vec3& point, int axis,
+                                  const AxisRayTolerances& tol)
+{
+    const Frame f = frame_of(point, axis);
+    AxisHits hits(tol.tie_relative);
+    const Tris& faces = surface.faces;
+    for (Index face = 0; face < faces.rows(); ++face) {
+        const double* A = vertex_ptr(surface, faces(face, 0));
+        const double* B = vertex_ptr(surface, faces(face, 1));
+        const double* C = vertex_ptr(surface, faces(face, 2));
+        // Eq. 4, closed: the bounding rectangle of the projected face.
+        if (f.pu < std::min({A[f.u], B[f.u], C[f.u]}) || f.pu > std::max({A[f.u], B[f.u], C[f.u]}) ||
+            f.pv < std::min({A[f.v], B[f.v], C[f.v]}) || f.pv > std::max({A[f.v], B[f.v], C[f.v]}))
+            continue;
+        hits.add(classify_exact(A, B, C, f, tol));
+    }
+    return hits.decide();
+}
+
+AxisOutcome axis_test_paper(const ContactSurface& surface, const Vec3& point, int axis,
+                            const std::vector<Index>& candidate_faces, const AxisRayTolerances& tol)
+{
+    const Frame f = frame_of(point, axis);
+    const Tris& faces = surface.faces;
+    double best = INF;
+    bool inside = false;
+    for (const Index face : candidate_faces) {
+        const double* A = vertex_ptr(surface, faces(face, 0));
+        const double* B = vertex_ptr(surface, faces(face, 1));
+        const double* C = vertex_ptr(surface, faces(face, 2));
+        // Eq. 4: strict inequalities against the bounding rectangle.
+        if (!(f.pu > std::min({A[f.u], B[f.u], C[f.u]}) && f.pu < std::max({A[f.u], B[f.u], C[f.u]}) &&
+              f.pv > std::min({A[f.v], B[f.v], C[f.v]}) && f.pv < std::max({A[f.v], B[f.v], C[f.v]})))
+            continue;
+        // Eq. 5/6 with areas doubled: A1 + A2 + A3 = Af inside, > Af outside.
+        const double au = A[f.u] - f.pu, av = A[f.v] - f.pv;
+        const double bu = B[f.u] - f.pu, bv = B[f.v] - f.pv;
+        const double cu = C[f.u] - f.pu, cv = C[f.v] - f.pv;
+        const double a1 = std::abs(bu * cv - bv * cu);
+        const double a2 = std::abs(cu * av - cv * au);
+        const double a3 = std::abs(au * bv - av * bu);
+        const Vec3 e1(B[0] - A[0], B[1] - A[1], B[2] - A[2]);
+        const Vec3 e2(C[0] - A[0], C[1] - A[1], C[2] - A[2]);
+        const Vec3 n = e1.cross(e2);
+        const double af = std::abs(n[axis]);
+        if (af == 0.0 || a1 + a2 + a3 > (1.0 + tol.area_relative) * af)
+            continue;
+        const double num = n.dot(Vec3(A[0], A[1], A[2]) - point);
+        const double t = std::abs(num / n[axis]);
+        if (t < best) {
+            best = t;
+            inside = num > 0.0; // d·n > 0
+        }
+    }
+    if (best == INF)
+        return AxisOutcome::NO_HIT;
+    return inside ? AxisOutcome::INSIDE : AxisOutcome::OUTSIDE;
+}
+
+} // namespace
+
+AxisOutcome axis_test(const ContactSurface& surface, const Vec3& point, int axis, DetectionMode mode,
+                      const std::vector<Index>& candidate_faces, const AxisRayTolerances& tolerances)
+{
+    switch (mode) {
+    case DetectionMode::PAPER:
+        return axis_test_paper(surface, point, axis, candidate_faces, tolerances);
+    case DetectionMode::BRUTE_FORCE:
+        return axis_test_brute_force(surface, point, axis, tolerances);
+    case DetectionMode::EXACT:
+        break;
+    }
+    return axis_test_exact(surface, point, axis, tolerances);
+}
+
+InsideTest inside_test(const ContactSurface& surface, const Vec3& point, DetectionMode mode,
+                       const std::vector<Index>& candidate_faces, const AxisRayTolerances& tolerances)
+{
+    InsideTest result;
+    if (!surface.closed) {
+        result.inside = winding_number(surface.vertices, surface.faces, point) > 0.5;
+        result.deciding_axis = 3;
+        return result;
+    }
+    for (int axis = 0; axis < 3; ++axis) {
+        const AxisOutcome outcome = axis_test(surface, point, axis, mode, candidate_faces, tolerances);
+        switch (outcome) {
+        case AxisOutcome::INSIDE:
+        case AxisOutcome::OUTSIDE:
+            result.inside = outcome == AxisOutcome::INSIDE;
+            result.deciding_axis = axis;
+            return result;
+        case AxisOutcome::ON_SURFACE:
+            result.on_surface = true;
+            result.deciding_axis = axis;
+            return result;
+        case AxisOutcome::NO_HIT:
+            if (mode != DetectionMode::PAPER) {
+                result.deciding_axis = axis;
+                return result;
+            }
+            break;
+        case AxisOutcome::DEGENERATE:
+            break;
+        }
+    }
+    if (mode != DetectionMode::PAPER) {
+        result.inside = winding_number(surface.vertices, surface.faces, point) > 0.5;
+        result.deciding_axis = 3;
+    }
+    return result;
+}
+
+} // namespace coro

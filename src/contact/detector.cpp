@@ -1,0 +1,190 @@
+#include <corocontact/contact/detector.hpp>
+
+#include <corocontact/contact/broad_phase.hpp>
+
+#include <tbb/blocked_range.h>
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <tuple>
+
+namespace coro {
+
+namespace {
+
+// Candidate vertices per task: large pairs are split, small ones stay whole.
+constexpr Index VERTEX_BLOCK = 128;
+
+struct Block {
+    std::size_t pair;
+    Index begin, end;
+};
+
+template <class Inside>
+std::vector<ContactPoint> run_detection(const std::vector<ContactSurface>& surfaces,
+                                        const std::vector<PairCandidates>& candidates, Index pairs,
+                                        const Inside& inside, bool contact_data, DetectionStats* stats)
+{
+    std::vector<Block> blocks;
+    for (std::size_t k = 0; k < candidates.size(); ++k) {
+        const auto n = static_cast<Index>(candidates[k].vertices.size());
+        for (Index b = 0; b < n; b += VERTEX_BLOCK)
+            blocks.push_back({k, b, std::min(n, b + VERTEX_BLOCK)});
+    }
+
+    tbb::enumerable_thread_specific<std::vector<ContactPoint>> local_points;
+    tbb::enumerable_thread_specific<DetectionStats> local_stats;
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, blocks.size(), 1),
+                      [&](const tbb::blocked_range<std::size_t>& range) {
+                          std::vector<ContactPoint>& points = local_points.local();
+                          DetectionStats& counts = local_stats.local();
+                          for (std::size_t b = range.begin(); b < range.end(); ++b) {
+                              const Block& block = blocks[b];
+                              const PairCandidates& pair = candidates[block.pair];
+                              const ContactSurface& body = surfaces[static_cast<std::size_t>(pair.body)];
+                              for (Index i = block.begin; i < block.end; ++i) {
+                                  const Index v = pair.vertices[static_cast<std::size_t>(i)];
+                                  const Vec3 p = body.vertices.row(v).transpose();
+                                  const InsideTest result = inside(pair, p);
+                                  ++counts.candidate_vertices;
+                                  counts.on_surface += result.on_surface ? 1 : 0;
+                                  counts.winding_fallbacks += result.deciding_axis == 3 ? 1 : 0;
+                                  if (result.inside) {
+                                      ++counts.inside;
+                                      if (contact_data) {
+                                          points.push_back(make_contact_point(surfaces, pair.body, v, pair.other));
+                                      } else {
+                                          ContactPoint c;
+                                          c.body = pair.body;
+                                          c.vertex = v;
+                                          c.other = pair.other;
+                                          points.push_back(c);
+                                      }
+                                  }
+                              }
+                          }
+                      });
+
+    std::vector<ContactPoint> points;
+    std::size_t total = 0;
+    for (const auto& part : local_points)
+        total += part.size();
+    points.reserve(total);
+    for (const auto& part : local_points)
+        points.insert(points.end(), part.begin(), part.end());
+    std::sort(points.begin(), points.end(), [](const ContactPoint& a, const ContactPoint& b) {
+        return std::tie(a.body, a.vertex, a.other) < std::tie(b.body, b.vertex, b.other);
+    });
+    if (stats) {
+        DetectionStats sum;
+        sum.pairs = pairs;
+        for (const DetectionStats& s : local_stats) {
+            sum.candidate_vertices += s.candidate_vertices;
+            sum.inside += s.inside;
+            sum.winding_fallbacks += s.winding_fallbacks;
+            sum.on_surface += s.on_surface;
+        }
+        *stats = sum;
+    }
+    return points;
+}
+
+Index count_pairs(const std::vector<PairCandidates>& candidates) { return static_cast<Index>(candidates.size() / 2); }
+
+} // namespace
+
+std::vector<PairCandidates> contact_candidates(const std::vector<ContactSurface>& surfaces, DetectionMode mode)
+{
+    std::vector<Aabb> boxes;
+    boxes.reserve(surfaces.size());
+    for (const ContactSurface& s : surfaces)
+        boxes.push_back(s.tree.bounds());
+    const auto pairs = overlapping_pairs(boxes);
+
+    std::vector<PairCandidates> candidates(2 * pairs.size());
+    for (std::size_t k = 0; k < pairs.size(); ++k) {
+        const auto [a, b] = pairs[k];
+        candidates[2 * k].body = a;
+        candidates[2 * k].other = b;
+        candidates[2 * k + 1].body = b;
+        candidates[2 * k + 1].other = a;
+    }
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, candidates.size(), 1),
+                      [&](const tbb::blocked_range<std::size_t>& range) {
+                          std::vector<Index> overlapping;
+                          for (std::size_t k = range.begin(); k < range.end(); ++k) {
+                              PairCandidates& c = candidates[k];
+                              const ContactSurface& body = surfaces[static_cast<std::size_t>(c.body)];
+                              const ContactSurface& other = surfaces[static_cast<std::size_t>(c.other)];
+                              c.overlap = boxes[static_cast<std::size_t>(c.body)].intersection(
+                                  boxes[static_cast<std::size_t>(c.other)]);
+                              body.tree.vertices_in_box(body.vertices, c.overlap, c.vertices);
+                              if (mode != DetectionMode::PAPER)
+                                  continue;
+                              other.tree.faces_overlapping(c.overlap, overlapping);
+                              for (const Index f : overlapping) {
+                                  bool any = false;
+                                  for (int j = 0; j < 3 && !any; ++j)
+                                      any = c.overlap.contains(other.vertices.row(other.faces(f, j)).transpose());
+                                  if (any)
+                                      c.faces.push_back(f);
+                              }
+                          }
+                      });
+    // Ordered by (body, other): the pairs are sorted by (min, max); reorder both directions.
+    std::sort(candidates.begin(), candidates.end(), [](const PairCandidates& x, const PairCandidates& y) {
+        return std::tie(x.body, x.other) < std::tie(y.body, y.other);
+    });
+    return candidates;
+}
+
+ContactPoint make_contact_point(const std::vector<ContactSurface>& surfaces, Index body, Index vertex, Index other)
+{
+    const ContactSurface& b = surfaces[static_cast<std::size_t>(other)];
+    const Vec3 p = surfaces[static_cast<std::size_t>(body)].vertices.row(vertex).transpose();
+    const AabbTree::Nearest nearest = b.tree.nearest(b.vertices, p);
+    ContactPoint c;
+    c.body = body;
+    c.vertex = vertex;
+    c.other = other;
+    c.depth = nearest.distance;
+    c.face = nearest.face;
+    c.barycentric = nearest.barycentric;
+    if (nearest.face >= 0) {
+        const Vec3 x0 = b.vertices.row(b.faces(nearest.face, 0)).transpose();
+        const Vec3 x1 = b.vertices.row(b.faces(nearest.face, 1)).transpose();
+        const Vec3 x2 = b.vertices.row(b.faces(nearest.face, 2)).transpose();
+        const Vec3 n = (x1 - x0).cross(x2 - x0);
+        if (n.norm() > 0.0)
+            c.normal = n.normalized();
+        else if (nearest.distance > 0.0)
+            c.normal = (nearest.point - p) / nearest.distance;
+    }
+    return c;
+}
+
+std::vector<ContactPoint> detect_contacts(const std::vector<ContactSurface>& surfaces,
+                                          const DetectionSettings& settings, DetectionStats* stats)
+{
+    const std::vector<PairCandidates> candidates = contact_candidates(surfaces, settings.mode);
+    return run_detection(
+        surfaces, candidates, count_pairs(candidates),
+        [&](const PairCandidates& pair, const Vec3& p) {
+            return inside_test(surfaces[static_cast<std::size_t>(pair.other)], p, settings.mode, pair.faces,
+                               settings.tolerances);
+        },
+        settings.contact_data, stats);
+}
+
+std::vector<ContactPoint> detect_contacts(const std::vector<ContactSurface>& surfaces,
+                                          const std::function<InsideTest(Index other, const Vec3& point)>& inside,
+                                          DetectionStats* stats, bool contact_data)
+{
+    const std::vector<PairCandidates> candidates = contact_candidates(surfaces, DetectionMode::EXACT);
+    return run_detection(
+        surfaces, candidates, count_pairs(candidates),
+        [&](const PairCandidates& pair, const Vec3& p) { return inside(pair.other, p); }, contact_data, stats);
+}
+
+} // namespace coro

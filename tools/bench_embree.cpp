@@ -1,0 +1,325 @@
+// bench_embree: the Embree backend on two deforming spheres in deep overlap, per frame:
+// Embree's update (refit, and its rebuild settings for comparison), detection, the whole
+// frame, plain first-hit rays, and the axis-ray exact detector on the same frames.
+//
+//   bench_embree [--threads N] [benchmark options]      (N defaults to 2)
+//
+// Arguments of each benchmark: sphere resolution (12: ~10k tets, 26: ~105k tets per sphere)
+// and, for Embree, the build setting (0 refit, 1 LOW rebuild, 2 MEDIUM rebuild).
+#include "detail/embree_scene_set.hpp"
+
+#include <corocontact/contact/detector.hpp>
+#include <corocontact/core/primitives.hpp>
+#include <corocontact/core/surface_mesh.hpp>
+#include <corocontact/embree/embree_detector.hpp>
+
+#include <benchmark/benchmark.h>
+
+#include <tbb/global_control.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <cstring>
+#include <map>
+#include <memory>
+#include <string>
+#include <tuple>
+#include <vector>
+
+namespace {
+
+using namespace coro;
+
+constexpr int FRAMES = 16;
+constexpr double PI = 3.14159265358979323846;
+
+/// Two unit spheres, centres 0.8 apart (deep overlap), breathing and wobbling over FRAMES
+/// frames; every frame's node positions are precomputed so that no benchmark times them.
+struct Scene {
+    Index resolution = 0;
+    Index tets_per_sphere = 0;
+    std::vector<Tris> faces;                            // per body, into its nodes
+    std::vector<std::vector<Positions>> frames;         // [frame][body] node positions
+    std::vector<std::vector<ContactSurface>> surfaces;  // [frame]: surfaces at that frame
+};
+
+Positions deformed(const Positions& rest, const Vec3& centre, int frame, double phase)
+{
+    const double s = std::sin(2.0 * PI * frame / FRAMES + phase);
+    Positions out(rest.rows(), 3);
+    for (Eigen::Index v = 0; v < rest.rows(); ++v) {
+        const Vec3 x = rest.row(v).transpose() - centre;
+        const Vec3 wobble(std::sin(2.0 * x.y()), std::sin(2.0 * x.z()), std::sin(2.0 * x.x()));
+        out.row(v) = (centre + (1.0 + 0.03 * s) * x + 0.04 * s * wobble).transpose();
+    }
+    return out;
+}
+
+const Scene& scene(Index resolution)
+{
+    static std::map<Index, std::unique_ptr<Scene>> cache;
+    auto& entry = cache[resolution];
+    if (entry)
+        return *entry;
+    entry = std::make_unique<Scene>();
+    Scene& sc = *entry;
+    sc.resolution = resolution;
+    const std::vector<Vec3> centres{Vec3(0.0, 0.0, 0.0), Vec3(0.8, 0.05, -0.03)};
+    std::vector<Positions> rest;
+    for (const Vec3& c : centres) {
+        const TetMesh mesh = make_sphere(c, 1.0, resolution);
+        sc.tets_per_sphere = mesh.num_tets();
+        sc.faces.push_back(boundary_faces(mesh));
+        rest.push_back(mesh.rest_positions);
+    }
+    for (int f = 0; f < FRAMES; ++f) {
+        std::vector<Positions> bodies;
+        for (std::size_t b = 0; b < centres.size(); ++b)
+            bodies.push_back(deformed(rest[b], centres[b], f, 1.3 * static_cast<double>(b)));
+        std::vector<ContactSurface> surfaces;
+        for (std::size_t b = 0; b < centres.size(); ++b)
+            surfaces.push_back(ContactSurface::from_body("sphere" + std::to_string(b), bodies[b], sc.faces[b]));
+        sc.frames.push_back(std::move(bodies));
+        sc.surfaces.push_back(std::move(surfaces));
+    }
+    return sc;
+}
+
+detail::EmbreeBuild build_of(const benchmark::State& state)
+{
+    return static_cast<detail::EmbreeBuild>(state.range(1));
+}
+
+const char* build_name(detail::EmbreeBuild b)
+{
+    switch (b) {
+    case detail::EmbreeBuild::REFIT: return "refit";
+    case detail::EmbreeBuild::LOW_REBUILD: return "low-rebuild";
+    case detail::EmbreeBuild::MEDIUM_REBUILD: return "medium-rebuild";
+    }
+    return "?";
+}
+
+void label(benchmark::State& state, const Scene& sc, const char* what)
+{
+    state.SetLabel(std::string(what) + ", 2 spheres x " + std::to_string(sc.tets_per_sphere) + " tets, " +
+                   std::to_string(sc.surfaces[0][0].faces.rows()) + " faces each");
+}
+
+/// Embree's per-frame update alone: float upload + rtcCommitGeometry + rtcCommitScene.
+void BM_EmbreeUpdate(benchmark::State& state)
+{
+    const Scene& sc = scene(static_cast<Index>(state.range(0)));
+    detail::EmbreeSceneSet scenes(sc.surfaces[0], build_of(state));
+    int frame = 0;
+    for (auto _ : state) {
+        frame = (frame + 1) % FRAMES;
+        scenes.update(sc.surfaces[static_cast<std::size_t>(frame)]);
+    }
+    label(state, sc, build_name(build_of(state)));
+}
+
+/// Embree detection on one frame (scenes current), with the query counts as rates.
+void BM_EmbreeDetect(benchmark::State& state)
+{
+    const Scene& sc = scene(static_cast<Index>(state.range(0)));
+    const std::vector<ContactSurface>& surfaces = sc.surfaces[0];
+    detail::EmbreeSceneSet scenes(surfaces, build_of(state));
+    DetectionStats stats;
+    detail::EmbreeQueryCounts counts;
+    detail::detect_contacts_embree(surfaces, scenes, DetectionSettings{}, &stats, &counts); // counts, untimed
+    for (auto _ : state)
+        benchmark::DoNotOptimize(detail::detect_contacts_embree(surfaces, scenes, DetectionSettings{}, nullptr, nullptr));
+    const auto n = static_cast<double>(state.iterations());
+    state.counters["queries"] = static_cast<double>(stats.candidate_vertices);
+    state.counters["rays"] = static_cast<double>(counts.rays);
+    state.counters["inside"] = static_cast<double>(stats.inside);
+    state.counters["vertex_queries/s"] =
+        benchmark::Counter(n * static_cast<double>(stats.candidate_vertices), benchmark::Counter::kIsRate);
+    state.counters["rays/s"] = benchmark::Counter(n * static_cast<double>(counts.rays), benchmark::Counter::kIsRate);
+    label(state, sc, build_name(build_of(state)));
+}
+
+/// One whole Embree frame: surfaces follow the nodes (copy + AABB-tree refit, needed for the
+/// mid phase and the depth), Embree update, Embree detection.
+void BM_EmbreeFrame(benchmark::State& state)
+{
+    const Scene& sc = scene(static_cast<Index>(state.range(0)));
+    std::vector<ContactSurface> surfaces = sc.surfaces[0];
+    detail::EmbreeSceneSet scenes(surfaces, build_of(state));
+    int frame = 0;
+    for (auto _ : state) {
+        frame = (frame + 1) % FRAMES;
+        for (std::size_t b = 0; b < surfaces.size(); ++b)
+            surfaces[b].update(sc.frames[static_cast<std::size_t>(frame)][b]);
+        scenes.update(surfaces);
+        benchmark::DoNotOptimize(detail::detect_contacts_embree(surfaces, scenes, DetectionSettings{}, nullptr, nullptr));
+    }
+    label(state, sc, build_name(build_of(state)));
+}
+
+/// Plain first-hit rays (no filter, +x) from the candidate vertices: Embree's raw ray rate.
+void BM_EmbreeFirstHitRays(benchmark::State& state)
+{
+    const Scene& sc = scene(static_cast<Index>(state.range(0)));
+    const std::vector<ContactSurface>& surfaces = sc.surfaces[0];
+    detail::EmbreeSceneSet scenes(surfaces, build_of(state));
+    std::vector<std::pair<Index, Vec3>> queries;
+    for (const PairCandidates& pair : contact_candidates(surfaces, DetectionMode::EXACT))
+        for (Index v : pair.vertices)
+            queries.emplace_back(pair.other, surfaces[static_cast<std::size_t>(pair.body)].vertices.row(v).transpose());
+    for (auto _ : state)
+        for (const auto& [other, p] : queries)
+            benchmark::DoNotOptimize(scenes.first_hit(other, p, 0));
+    state.counters["rays"] = static_cast<double>(queries.size());
+    state.counters["rays/s"] = benchmark::Counter(static_cast<double>(state.iterations()) *
+                                                      static_cast<double>(queries.size()),
+                                                  benchmark::Counter::kIsRate);
+    label(state, sc, (std::string(build_name(build_of(state))) + ", 1 thread").c_str());
+}
+
+/// Embree's inside test alone (all-hit axis rays, winding-number fallback) on the candidate
+/// vertices, one thread: the cost of the narrow phase without the pipeline around it.
+void BM_EmbreeInsideTests(benchmark::State& state)
+{
+    const Scene& sc = scene(static_cast<Index>(state.range(0)));
+    const std::vector<ContactSurface>& surfaces = sc.surfaces[0];
+    detail::EmbreeSceneSet scenes(surfaces, build_of(state));
+    std::vector<std::pair<Index, Vec3>> queries;
+    for (const PairCandidates& pair : contact_candidates(surfaces, DetectionMode::EXACT))
+        for (Index v : pair.vertices)
+            queries.emplace_back(pair.other, surfaces[static_cast<std::size_t>(pair.body)].vertices.row(v).transpose());
+    detail::EmbreeQueryCounts counts;
+    for (const auto& [other, p] : queries)
+        scenes.inside_test(surfaces[static_cast<std::size_t>(other)], other, p, &counts);
+    for (auto _ : state)
+        for (const auto& [other, p] : queries)
+            benchmark::DoNotOptimize(scenes.inside_test(surfaces[static_cast<std::size_t>(other)], other, p));
+    const auto n = static_cast<double>(state.iterations());
+    state.counters["queries"] = static_cast<double>(queries.size());
+    state.counters["rays"] = static_cast<double>(counts.rays);
+    state.counters["vertex_queries/s"] =
+        benchmark::Counter(n * static_cast<double>(queries.size()), benchmark::Counter::kIsRate);
+    state.counters["rays/s"] = benchmark::Counter(n * static_cast<double>(counts.rays), benchmark::Counter::kIsRate);
+    label(state, sc, (std::string(build_name(build_of(state))) + ", 1 thread").c_str());
+}
+
+/// The contact library's pipeline around the narrow phase (broad and mid phase, nearest-point
+/// depth and normal of the inside vertices, merge and sort) with the inside answers looked up
+/// from a precomputed table: what a detection pass costs besides the inside tests.
+void BM_PipelineWithoutNarrowPhase(benchmark::State& state)
+{
+    const Scene& sc = scene(static_cast<Index>(state.range(0)));
+    const std::vector<ContactSurface>& surfaces = sc.surfaces[0];
+    std::map<std::tuple<Index, double, double, double>, InsideTest> answers;
+    for (const PairCandidates& pair : contact_candidates(surfaces, DetectionMode::EXACT))
+        for (Index v : pair.vertices) {
+            const Vec3 p = surfaces[static_cast<std::size_t>(pair.body)].vertices.row(v).transpose();
+            answers[{pair.other, p.x(), p.y(), p.z()}] = inside_test(
+                surfaces[static_cast<std::size_t>(pair.other)], p, DetectionMode::EXACT, {}, AxisRayTolerances{});
+        }
+    for (auto _ : state)
+        benchmark::DoNotOptimize(detect_contacts(
+            surfaces, [&](Index other, const Vec3& p) { return answers.at({other, p.x(), p.y(), p.z()}); },
+            nullptr));
+    label(state, sc, "table lookup instead of inside tests");
+}
+
+/// The axis-ray detector's refit alone (surfaces follow the nodes: copy + tree refit).
+void BM_AxisRayRefit(benchmark::State& state)
+{
+    const Scene& sc = scene(static_cast<Index>(state.range(0)));
+    std::vector<ContactSurface> surfaces = sc.surfaces[0];
+    int frame = 0;
+    for (auto _ : state) {
+        frame = (frame + 1) % FRAMES;
+        for (std::size_t b = 0; b < surfaces.size(); ++b)
+            surfaces[b].update(sc.frames[static_cast<std::size_t>(frame)][b]);
+    }
+    label(state, sc, "axis-ray");
+}
+
+/// The axis-ray exact detector on one frame, and a whole frame (refit + detection).
+void BM_AxisRayDetect(benchmark::State& state)
+{
+    const Scene& sc = scene(static_cast<Index>(state.range(0)));
+    const std::vector<ContactSurface>& surfaces = sc.surfaces[0];
+    DetectionStats stats;
+    detect_contacts(surfaces, DetectionSettings{}, &stats);
+    for (auto _ : state)
+        benchmark::DoNotOptimize(detect_contacts(surfaces, DetectionSettings{}));
+    state.counters["queries"] = static_cast<double>(stats.candidate_vertices);
+    state.counters["inside"] = static_cast<double>(stats.inside);
+    state.counters["vertex_queries/s"] = benchmark::Counter(
+        static_cast<double>(state.iterations()) * static_cast<double>(stats.candidate_vertices),
+        benchmark::Counter::kIsRate);
+    // Agreement with Embree on this frame (not timed).
+    const EmbreeScenes scenes(surfaces);
+    state.counters["disagreements"] = static_cast<double>(
+        cross_check(detect_contacts(surfaces, DetectionSettings{}),
+                    detect_contacts_embree(surfaces, scenes, DetectionSettings{}))
+            .size());
+    label(state, sc, "axis-ray exact");
+}
+
+void BM_AxisRayFrame(benchmark::State& state)
+{
+    const Scene& sc = scene(static_cast<Index>(state.range(0)));
+    std::vector<ContactSurface> surfaces = sc.surfaces[0];
+    int frame = 0;
+    for (auto _ : state) {
+        frame = (frame + 1) % FRAMES;
+        for (std::size_t b = 0; b < surfaces.size(); ++b)
+            surfaces[b].update(sc.frames[static_cast<std::size_t>(frame)][b]);
+        benchmark::DoNotOptimize(detect_contacts(surfaces, DetectionSettings{}));
+    }
+    label(state, sc, "axis-ray exact");
+}
+
+void embree_args(benchmark::internal::Benchmark* b)
+{
+    for (int res : {12, 26})
+        for (int build : {0, 1, 2})
+            b->Args({res, build});
+}
+
+void sizes(benchmark::internal::Benchmark* b)
+{
+    for (int res : {12, 26})
+        b->Args({res});
+}
+
+BENCHMARK(BM_EmbreeUpdate)->Apply(embree_args)->UseRealTime()->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_EmbreeDetect)->Apply(embree_args)->UseRealTime()->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_EmbreeFrame)->Apply(embree_args)->UseRealTime()->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_EmbreeFirstHitRays)->Args({12, 0})->Args({26, 0})->Args({26, 2})->UseRealTime()->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_EmbreeInsideTests)->Args({12, 0})->Args({26, 0})->Args({26, 2})->UseRealTime()->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_PipelineWithoutNarrowPhase)->Apply(sizes)->UseRealTime()->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_AxisRayRefit)->Apply(sizes)->UseRealTime()->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_AxisRayDetect)->Apply(sizes)->UseRealTime()->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_AxisRayFrame)->Apply(sizes)->UseRealTime()->Unit(benchmark::kMicrosecond);
+
+} // namespace
+
+int main(int argc, char** argv)
+{
+    // --threads N (default 2) sets the TBB thread count; the rest goes to Google Benchmark.
+    std::size_t threads = 2;
+    std::vector<char*> args;
+    for (int i = 0; i < argc; ++i) {
+        if (std::strcmp(argv[i], "--threads") == 0 && i + 1 < argc) {
+            threads = static_cast<std::size_t>(std::strtoul(argv[++i], nullptr, 10));
+            continue;
+        }
+        args.push_back(argv[i]);
+    }
+    const tbb::global_control control(tbb::global_control::max_allowed_parallelism, threads);
+    int n = static_cast<int>(args.size());
+    benchmark::Initialize(&n, args.data());
+    if (benchmark::ReportUnrecognizedArguments(n, args.data()))
+        return 1;
+    benchmark::AddCustomContext("tbb_threads", std::to_string(threads));
+    benchmark::RunSpecifiedBenchmarks();
+    benchmark::Shutdown();
+    return 0;
+}
