@@ -1,6 +1,7 @@
 #include <corocontact/io/scene_output.hpp>
 
 #include <corocontact/core/error.hpp>
+#include <corocontact/sim/scene_contact.hpp>
 
 #include <fstream>
 #include <iomanip>
@@ -12,7 +13,12 @@ std::vector<FrameBlock> scene_frame(const Scene& scene)
 {
     std::vector<FrameBlock> blocks;
     blocks.reserve(scene.bodies.size());
-    for (const Body& body : scene.bodies) {
+    std::vector<Index> num_vertices;
+    for (const Body& body : scene.bodies)
+        num_vertices.push_back(body.num_vertices());
+    const std::vector<NodeContact> contact = node_contacts(scene.surfaces, scene.contacts, num_vertices);
+    for (std::size_t b = 0; b < scene.bodies.size(); ++b) {
+        const Body& body = scene.bodies[b];
         // Bodies are numbered internally by METIS part; frames keep the input's order.
         const Index n_vertices = body.num_vertices(), n_tets = body.mesh().num_tets();
         const VecX displacement = body.displacements();
@@ -20,12 +26,14 @@ std::vector<FrameBlock> scene_frame(const Scene& scene)
         FrameBlock block;
         block.name = body.name();
         block.points.resize(n_vertices, 3);
-        Eigen::MatrixXd u(n_vertices, 3), v(n_vertices, 3);
+        Eigen::MatrixXd u(n_vertices, 3), v(n_vertices, 3), inside(n_vertices, 1), depth(n_vertices, 1);
         for (Index i = 0; i < n_vertices; ++i) {
             const Index row = body.input_node(i);
             block.points.row(row) = body.positions().segment<3>(3 * i).transpose();
             u.row(row) = displacement.segment<3>(3 * i).transpose();
             v.row(row) = body.velocities().segment<3>(3 * i).transpose();
+            inside(row, 0) = contact[b].inside[static_cast<std::size_t>(i)];
+            depth(row, 0) = contact[b].depth[i];
         }
         block.tets.resize(n_tets, 4);
         Eigen::MatrixXd von_mises(n_tets, 1), partition(n_tets, 1);
@@ -38,6 +46,8 @@ std::vector<FrameBlock> scene_frame(const Scene& scene)
         }
         block.point_data.push_back({"displacement", std::move(u)});
         block.point_data.push_back({"velocity", std::move(v)});
+        block.point_data.push_back({"contact_inside", std::move(inside)});
+        block.point_data.push_back({"contact_depth", std::move(depth)});
         block.cell_data.push_back({"von_mises", std::move(von_mises)});
         block.cell_data.push_back({"partition", std::move(partition)});
         blocks.push_back(std::move(block));
@@ -69,6 +79,9 @@ std::string summary_json(const RunSummary& summary, const SummaryContext& contex
         << "  \"solves\": " << summary.solves << ",\n"
         << "  \"solves_not_converged\": " << summary.solves_not_converged << ",\n"
         << "  \"static_not_converged\": " << summary.static_not_converged << ",\n"
+        << "  \"max_contact_depth\": " << summary.max_contact_depth << ",\n"
+        << "  \"contacts_mean\": " << summary.contacts_mean << ",\n"
+        << "  \"embree_disagreements\": " << summary.embree_disagreements << ",\n"
         << "  \"peak_rss_mb\": " << context.peak_rss_mb << "\n"
         << "}\n";
     return out.str();

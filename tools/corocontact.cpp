@@ -11,6 +11,10 @@
 #include <corocontact/io/scene_loader.hpp>
 #include <corocontact/io/scene_output.hpp>
 #include <corocontact/io/vtk_series.hpp>
+#include <corocontact/sim/scene_contact.hpp>
+#if CORO_WITH_EMBREE
+#include <corocontact/embree/embree_detector.hpp>
+#endif
 #include <corocontact/partition/part_layout.hpp>
 #include <corocontact/partition/partition.hpp>
 
@@ -22,6 +26,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cstdio>
 #include <iostream>
 #include <memory>
@@ -95,11 +100,79 @@ int run_case(const RunOptions& options)
     std::printf("  PCG: %.1f iterations per solve, mean relative residual %.2e, %d of %d solves at the cap\n",
                 summary.cg_iterations_mean, summary.cg_residual_mean, static_cast<int>(summary.solves_not_converged),
                 static_cast<int>(summary.solves));
+    if (spec.contact.enabled) {
+        std::printf("  contact: %.1f vertices inside per step, max depth %.4g m", summary.contacts_mean,
+                    summary.max_contact_depth);
+        if (spec.contact.cross_check == coro::CrossCheck::EMBREE)
+            std::printf(", Embree disagreements %d", static_cast<int>(summary.embree_disagreements));
+        std::printf("\n");
+    }
     if (summary.static_not_converged > 0)
         std::printf("  warning: %d static load steps did not reach static_tolerance\n",
                     static_cast<int>(summary.static_not_converged));
     std::printf("  peak memory %.1f MB\n  series: %s\n  summary: %s\n", context.peak_rss_mb,
                 writer.pvd_path().string().c_str(), summary_path.string().c_str());
+    return 0;
+}
+
+struct DetectOptions {
+    std::string case_file;
+    std::string mode;
+    std::string cross_check;
+    std::string csv;
+    bool verbose = false;
+};
+
+int detect_case(const DetectOptions& options)
+{
+    coro::CaseSpec spec = coro::read_case(options.case_file);
+    if (!options.mode.empty())
+        spec.contact.mode = options.mode == "paper" ? coro::ContactMode::PAPER : coro::ContactMode::EXACT;
+#if !CORO_WITH_EMBREE
+    CORO_CHECK(options.cross_check.empty(), coro::InputError,
+               "--cross-check embree: this build has no Embree (configure with CORO_WITH_EMBREE=ON)");
+#endif
+    coro::LoadedScene loaded = coro::load_scene(spec);
+    for (const std::string& warning : loaded.warnings)
+        std::cerr << "warning: " << warning << "\n";
+    const std::vector<coro::ContactSurface> surfaces = coro::make_contact_surfaces(loaded.scene.bodies);
+
+    coro::DetectionStats stats;
+    const auto start = std::chrono::steady_clock::now();
+    const std::vector<coro::ContactPoint> points =
+        coro::detect_contacts(surfaces, coro::detection_settings(spec.contact), &stats);
+    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+
+    std::FILE* report = options.csv == "-" ? stderr : stdout;
+    std::fprintf(report,
+                 "%s: %zu bodies, %d overlapping pairs, %d vertex queries, %d inside, %d on a surface, "
+                 "%d winding-number fallbacks, %s mode, %.3f ms\n",
+                 spec.simulation.name.c_str(), surfaces.size(), stats.pairs, stats.candidate_vertices, stats.inside,
+                 stats.on_surface, stats.winding_fallbacks,
+                 spec.contact.mode == coro::ContactMode::PAPER ? "paper" : "exact", 1e3 * seconds);
+
+#if CORO_WITH_EMBREE
+    if (!options.cross_check.empty()) {
+        const coro::EmbreeScenes scenes(surfaces);
+        const std::vector<coro::ContactPoint> embree =
+            coro::detect_contacts_embree(surfaces, scenes, coro::detection_settings(spec.contact));
+        const std::vector<coro::Disagreement> disagreements = coro::cross_check(points, embree);
+        std::fprintf(report, "embree cross-check: %zu disagreements (axis-ray %zu inside, Embree %zu inside)\n",
+                     disagreements.size(), points.size(), embree.size());
+        if (options.verbose)
+            for (const coro::Disagreement& d : disagreements)
+                std::fprintf(report, "  %s vertex %d in %s: axis-ray says %s, Embree says %s\n",
+                             surfaces[static_cast<std::size_t>(d.body)].name.c_str(),
+                             surfaces[static_cast<std::size_t>(d.body)].source_id[static_cast<std::size_t>(d.vertex)],
+                             surfaces[static_cast<std::size_t>(d.other)].name.c_str(),
+                             d.axis_ray_inside ? "inside" : "outside", d.embree_inside ? "inside" : "outside");
+    }
+#endif
+    const std::string csv = coro::contacts_csv(surfaces, points);
+    if (options.csv == "-")
+        std::fputs(csv.c_str(), stdout);
+    else if (!options.csv.empty())
+        coro::write_file_atomically(options.csv, csv);
     return 0;
 }
 
@@ -162,6 +235,19 @@ int main(int argc, char** argv)
     run_command->add_flag("--quiet", run.quiet, "no progress output");
     run_command->set_version_flag("--version", std::string("corocontact ") + CORO_VERSION);
 
+    DetectOptions detect;
+    CLI::App* detect_command =
+        app.add_subcommand("detect", "contact detection on the initial configuration, optionally as CSV");
+    detect_command->add_option("case", detect.case_file, "case file (.toml)")->required();
+    detect_command->add_option("--mode", detect.mode, "exact (default) or paper; overrides [contact] mode")
+        ->check(CLI::IsMember({"exact", "paper"}));
+    detect_command->add_option("--cross-check", detect.cross_check, "also detect with Embree and count disagreements")
+        ->check(CLI::IsMember({"embree"}));
+    detect_command->add_option("--csv", detect.csv, "write body,vertex,other,depth rows to FILE (- for stdout)");
+    detect_command->add_flag("--verbose", detect.verbose, "list the vertices on which Embree disagrees");
+    detect_command->add_option("--threads", threads, "worker threads (default: all cores)")->check(CLI::PositiveNumber);
+    detect_command->set_version_flag("--version", std::string("corocontact ") + CORO_VERSION);
+
     std::string mesh_path;
     CLI::App* info_command = app.add_subcommand("info", "counts, volume, quality and surface check of a mesh");
     info_command->add_option("mesh", mesh_path, "tet mesh file")->required();
@@ -184,6 +270,8 @@ int main(int argc, char** argv)
     try {
         if (run_command->parsed())
             return run_case(run);
+        if (detect_command->parsed())
+            return detect_case(detect);
         return describe_mesh(mesh_path, parts);
     } catch (const coro::InputError& error) {
         std::cerr << "error: " << error.what() << "\n";

@@ -16,17 +16,18 @@ ContactSurface ContactSurface::from_body(std::string name, CRef<Positions> body_
             CORO_CHECK(faces(f, c) >= 0 && faces(f, c) < body_positions.rows(), InputError,
                        surface.name << ": surface face " << f << " uses node " << faces(f, c)
                                     << ", but the body has " << body_positions.rows() << " nodes");
-    surface.source_id = surface_vertices(faces);
+    surface.body_node = surface_vertices(faces);
+    surface.source_id = surface.body_node;
     std::vector<Index> local(static_cast<std::size_t>(body_positions.rows()), -1);
-    for (std::size_t i = 0; i < surface.source_id.size(); ++i)
-        local[static_cast<std::size_t>(surface.source_id[i])] = static_cast<Index>(i);
+    for (std::size_t i = 0; i < surface.body_node.size(); ++i)
+        local[static_cast<std::size_t>(surface.body_node[i])] = static_cast<Index>(i);
     surface.faces.resize(faces.rows(), 3);
     for (Index f = 0; f < faces.rows(); ++f)
         for (int c = 0; c < 3; ++c)
             surface.faces(f, c) = local[static_cast<std::size_t>(faces(f, c))];
-    surface.vertices.resize(static_cast<Index>(surface.source_id.size()), 3);
-    for (std::size_t i = 0; i < surface.source_id.size(); ++i)
-        surface.vertices.row(static_cast<Index>(i)) = body_positions.row(surface.source_id[i]);
+    surface.vertices.resize(static_cast<Index>(surface.body_node.size()), 3);
+    for (std::size_t i = 0; i < surface.body_node.size(); ++i)
+        surface.vertices.row(static_cast<Index>(i)) = body_positions.row(surface.body_node[i]);
     surface.closed = faces.rows() > 0 && check_surface(surface.faces).closed_and_oriented();
     surface.tree.build(surface.vertices, surface.faces);
     return surface;
@@ -34,9 +35,9 @@ ContactSurface ContactSurface::from_body(std::string name, CRef<Positions> body_
 
 void ContactSurface::update(CRef<Positions> body_positions)
 {
-    for (std::size_t i = 0; i < source_id.size(); ++i) {
-        CORO_ASSERT(source_id[i] < body_positions.rows());
-        vertices.row(static_cast<Index>(i)) = body_positions.row(source_id[i]);
+    for (std::size_t i = 0; i < body_node.size(); ++i) {
+        CORO_ASSERT(body_node[i] < body_positions.rows());
+        vertices.row(static_cast<Index>(i)) = body_positions.row(body_node[i]);
     }
     tree.refit(vertices);
 }

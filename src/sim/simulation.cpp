@@ -1,8 +1,14 @@
 #include <corocontact/sim/simulation.hpp>
 
+#include <corocontact/config.hpp>
 #include <corocontact/core/error.hpp>
 #include <corocontact/sim/integrator.hpp>
+#include <corocontact/sim/scene_contact.hpp>
 #include <corocontact/sim/static_solver.hpp>
+
+#if CORO_WITH_EMBREE
+#include <corocontact/embree/embree_detector.hpp>
+#endif
 
 #include <algorithm>
 #include <chrono>
@@ -37,7 +43,52 @@ PcgSettings pcg_settings(const SolverSettings& solver)
     return settings;
 }
 
-Simulation::Simulation(Scene& scene, const CaseSpec& spec) : m_scene(scene), m_spec(spec) {}
+#if CORO_WITH_EMBREE
+struct Simulation::EmbreeCheck {
+    EmbreeScenes scenes;
+    explicit EmbreeCheck(const std::vector<ContactSurface>& surfaces) : scenes(surfaces) {}
+};
+#else
+struct Simulation::EmbreeCheck {};
+#endif
+
+Simulation::Simulation(Scene& scene, const CaseSpec& spec) : m_scene(scene), m_spec(spec)
+{
+    if (!spec.contact.enabled)
+        return;
+    m_scene.surfaces = make_contact_surfaces(m_scene.bodies);
+    if (spec.contact.cross_check == CrossCheck::EMBREE) {
+#if CORO_WITH_EMBREE
+        m_embree = std::make_unique<EmbreeCheck>(m_scene.surfaces);
+#else
+        CORO_THROW(InputError, spec.file.string() << ": contact.cross_check = \"embree\", but this build has no "
+                                                     "Embree (configure with CORO_WITH_EMBREE=ON)");
+#endif
+    }
+}
+
+Simulation::~Simulation() = default;
+
+void Simulation::detect(RunSummary& summary)
+{
+    if (!m_spec.contact.enabled)
+        return;
+    ScopedTimer timer(summary.phases.contact);
+    update_contact_surfaces(m_scene.bodies, m_scene.surfaces);
+    m_scene.contacts = detect_contacts(m_scene.surfaces, detection_settings(m_spec.contact));
+    ++summary.detections;
+    summary.contacts_mean += static_cast<double>(m_scene.contacts.size());
+    for (const ContactPoint& point : m_scene.contacts)
+        summary.max_contact_depth = std::max(summary.max_contact_depth, point.depth);
+#if CORO_WITH_EMBREE
+    if (m_embree) {
+        m_embree->scenes.update(m_scene.surfaces);
+        const std::vector<ContactPoint> embree =
+            detect_contacts_embree(m_scene.surfaces, m_embree->scenes, detection_settings(m_spec.contact));
+        summary.embree_disagreements += static_cast<Index>(cross_check(m_scene.contacts, embree).size());
+    }
+#endif
+}
 
 void Simulation::dynamic_step(RunSummary& summary)
 {
@@ -85,6 +136,7 @@ RunSummary Simulation::run(Index steps, const FrameCallback& on_frame, const Pro
         on_frame(step, time_of(step));
     };
 
+    detect(summary);
     write_frame(0);
     for (Index step = 1; step <= total; ++step) {
         try {
@@ -92,6 +144,7 @@ RunSummary Simulation::run(Index steps, const FrameCallback& on_frame, const Pro
                 static_step(step, summary);
             else
                 dynamic_step(summary);
+            detect(summary);
         } catch (const NumericalError& error) {
             CORO_THROW(NumericalError, "step " << step << " (t = " << time_of(step) << "): " << error.what());
         }
@@ -107,6 +160,8 @@ RunSummary Simulation::run(Index steps, const FrameCallback& on_frame, const Pro
         summary.cg_iterations_mean /= summary.solves;
         summary.cg_residual_mean /= summary.solves;
     }
+    if (summary.detections > 0)
+        summary.contacts_mean /= summary.detections;
     return summary;
 }
 

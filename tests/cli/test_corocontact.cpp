@@ -1,5 +1,9 @@
 #include "mesh_fixtures.hpp"
 
+#include <corocontact/config.hpp>
+#include <corocontact/core/primitives.hpp>
+#include <corocontact/core/surface_mesh.hpp>
+
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
@@ -16,7 +20,9 @@
 
 #include <sys/wait.h>
 
+#include <algorithm>
 #include <fstream>
+#include <set>
 #include <regex>
 #include <sstream>
 #include <string>
@@ -260,6 +266,115 @@ mesh = ")toml") + mesh + "\"\n");
     auto* partition = grid->GetCellData()->GetArray("partition");
     ASSERT_NE(partition, nullptr);
     EXPECT_GT(partition->GetRange()[1], 0.0); // really partitioned
+}
+
+TEST(CorocontactDetect, CsvRowsAreTheBallVerticesInsideTheSlab)
+{
+    // A partitioned ball half sunk into a slab: its surface vertex i (input order, as
+    // make_sphere numbers them) is inside the slab exactly when it lies below y = 0.
+    const fs::path dir = coro::test::scratch_dir("cli_detect");
+    const fs::path case_file = coro::test::write_text(dir / "sunk.toml", R"toml([solver]
+parts_per_thread = 8
+[[body]]
+name = "slab"
+shape = "box"
+min = [-1.0, -0.5, -1.0]
+max = [1.0, 0.0, 1.0]
+cells = [8, 2, 8]
+[[body]]
+name = "ball"
+shape = "sphere"
+center = [0.0, 0.13, 0.0]
+radius = 0.4
+resolution = 10
+)toml");
+    const Outcome outcome = run("detect " + case_file.string() + " --csv " + (dir / "out.csv").string(), dir);
+    ASSERT_EQ(outcome.exit_code, 0) << outcome.err;
+    EXPECT_THAT(outcome.out, HasSubstr("1 overlapping pairs"));
+
+    std::set<long> ball_rows;
+    std::istringstream csv(slurp(dir / "out.csv"));
+    std::string line;
+    std::getline(csv, line);
+    EXPECT_EQ(line, "body,vertex,other,depth");
+    bool seen_ball = false;
+    long previous_vertex = -1;
+    while (std::getline(csv, line)) {
+        const bool is_ball = line.rfind("ball,", 0) == 0;
+        EXPECT_FALSE(seen_ball && !is_ball) << "rows sorted by body order (slab before ball): " << line;
+        seen_ball = seen_ball || is_ball;
+        if (is_ball) {
+            const std::size_t comma = line.find(',', 5);
+            const long vertex = std::stol(line.substr(5, comma - 5));
+            EXPECT_GT(vertex, previous_vertex) << "rows sorted by vertex";
+            previous_vertex = vertex;
+            ball_rows.insert(vertex);
+            EXPECT_EQ(line.substr(comma + 1, 5), "slab,");
+        }
+    }
+    const coro::TetMesh ball = coro::make_sphere(coro::Vec3(0.0, 0.13, 0.0), 0.4, 10);
+    std::set<long> expected;
+    for (const coro::Index v : coro::surface_vertices(coro::boundary_faces(ball)))
+        if (ball.rest_positions(v, 1) < 0.0)
+            expected.insert(v);
+    EXPECT_FALSE(expected.empty());
+    EXPECT_EQ(ball_rows, expected);
+}
+
+TEST(CorocontactDetect, SameCsvWithOneAndTwoThreadsAndNoEmbreeDisagreement)
+{
+    const fs::path dir = coro::test::scratch_dir("cli_detect_threads");
+    const std::string case_file = std::string(CORO_CASES_DIR) + "/overlap/overlap.toml";
+    std::string outputs[2];
+    for (int threads = 1; threads <= 2; ++threads) {
+        const fs::path csv = dir / ("t" + std::to_string(threads) + ".csv");
+        std::string arguments = "detect " + case_file + " --threads " + std::to_string(threads) + " --csv " + csv.string();
+#if CORO_WITH_EMBREE
+        arguments += " --cross-check embree";
+#endif
+        const Outcome outcome = run(arguments, dir);
+        ASSERT_EQ(outcome.exit_code, 0) << outcome.err;
+#if CORO_WITH_EMBREE
+        EXPECT_THAT(outcome.out, HasSubstr("embree cross-check: 0 disagreements"));
+#endif
+        outputs[threads - 1] = slurp(csv);
+    }
+    EXPECT_GT(std::count(outputs[0].begin(), outputs[0].end(), '\n'), 100);
+    EXPECT_EQ(outputs[0], outputs[1]);
+}
+
+TEST(CorocontactDetect, PaperModeAndBadOptions)
+{
+    const fs::path dir = coro::test::scratch_dir("cli_detect_modes");
+    const std::string case_file = std::string(CORO_CASES_DIR) + "/overlap/overlap.toml";
+    const Outcome paper = run("detect " + case_file + " --mode paper", dir);
+    ASSERT_EQ(paper.exit_code, 0) << paper.err;
+    EXPECT_THAT(paper.out, HasSubstr("paper mode"));
+    EXPECT_EQ(run("detect " + case_file + " --mode sloppy", dir).exit_code, 2);
+    EXPECT_EQ(run("detect " + (dir / "absent.toml").string(), dir).exit_code, 2);
+}
+
+TEST(CorocontactRun, ContactArraysInFrames)
+{
+    const fs::path dir = coro::test::scratch_dir("cli_contact_run");
+    const std::string case_file = std::string(CORO_CASES_DIR) + "/overlap/overlap.toml";
+    const Outcome outcome = run("run " + case_file + " --quiet --out " + (dir / "o").string(), dir);
+    ASSERT_EQ(outcome.exit_code, 0) << outcome.err;
+    EXPECT_THAT(outcome.out, HasSubstr("contact:"));
+    vtkNew<vtkXMLMultiBlockDataReader> reader;
+    reader->SetFileName((dir / "o" / "overlap_000000.vtm").string().c_str());
+    reader->Update();
+    auto* blocks = vtkMultiBlockDataSet::SafeDownCast(reader->GetOutput());
+    ASSERT_EQ(blocks->GetNumberOfBlocks(), 3u);
+    auto* ball = vtkUnstructuredGrid::SafeDownCast(blocks->GetBlock(1));
+    auto* inside = ball->GetPointData()->GetArray("contact_inside");
+    auto* depth = ball->GetPointData()->GetArray("contact_depth");
+    ASSERT_NE(inside, nullptr);
+    ASSERT_NE(depth, nullptr);
+    EXPECT_EQ(inside->GetRange()[1], 1.0);
+    EXPECT_GT(depth->GetRange()[1], 0.05);
+    const std::string summary = slurp(dir / "o" / "overlap.summary.json");
+    EXPECT_THAT(summary, HasSubstr("\"max_contact_depth\""));
 }
 
 TEST(CorocontactInfo, DescribesAMesh)

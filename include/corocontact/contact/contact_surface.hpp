@@ -15,7 +15,9 @@ struct ContactSurface {
     std::string name;             ///< body name, for reports
     Positions vertices;           ///< #S×3 current positions of the surface vertices
     Tris faces;                   ///< #F×3 into vertices, outward (counter-clockwise from outside)
-    std::vector<Index> source_id; ///< #S: the vertex's node index in the body's mesh file
+    std::vector<Index> body_node; ///< #S: the vertex's row in the body positions given to from_body/update
+    std::vector<Index> source_id; ///< #S: the vertex's node index in the body's mesh file (for reports;
+                                  ///< from_body sets it to body_node, callers map it to the file order)
     bool closed = true;           ///< closed and consistently oriented (else: winding number only)
     AabbTree tree;                ///< over faces; build() once, refit() after vertices move
 

@@ -4,17 +4,22 @@
 
 #include <corocontact/sim/body.hpp>
 #include <corocontact/sim/case_spec.hpp>
+#include <corocontact/contact/contact_surface.hpp>
+#include <corocontact/contact/detector.hpp>
 #include <corocontact/sim/phase_times.hpp>
 #include <corocontact/solver/pcg.hpp>
 
 #include <functional>
+#include <memory>
 #include <vector>
 
 namespace coro {
 
-/// All bodies of a case.
+/// All bodies of a case, and what contact detection last found.
 struct Scene {
     std::vector<Body> bodies;
+    std::vector<ContactSurface> surfaces; ///< one per body when contact is enabled, else empty
+    std::vector<ContactPoint> contacts;   ///< the last detection, sorted by (body, vertex, other)
 
     Index num_tets() const;
     Index num_vertices() const;
@@ -31,6 +36,11 @@ struct RunSummary {
     Index solves = 0;              ///< PCG solves done
     Index solves_not_converged = 0; ///< solves that stopped at the iteration cap
     Index static_not_converged = 0; ///< static load steps that missed static_tolerance
+    double max_contact_depth = 0.0;  ///< deepest penetration seen by any detection [m]
+    double contacts_mean = 0.0;      ///< inside vertices per detection
+    Index detections = 0;            ///< detection passes (initial state and every step)
+    Index embree_disagreements = 0;  ///< with cross_check = "embree": vertices where Embree and
+                                     ///< the axis-ray test disagreed, summed over all detections
 };
 
 /// Called for every frame to write: (step, simulated time or load factor).
@@ -41,21 +51,31 @@ using ProgressCallback = std::function<void(Index done, Index total)>;
 /// Runs a scene as its case says.
 class Simulation {
 public:
-    /// @param[in,out] scene  bodies, advanced in place; must outlive the Simulation
-    /// @param[in] spec       settings (simulation, solver); bodies are already in `scene`
+    /// @param[in,out] scene  bodies, advanced in place; must outlive the Simulation. With contact
+    ///                       enabled, its contact surfaces are built here.
+    /// @param[in] spec       settings (simulation, solver, contact); bodies are already in `scene`
+    /// @throws InputError if cross_check = "embree" and the build has no Embree
     Simulation(Scene& scene, const CaseSpec& spec);
 
     /// Runs `steps` time steps (dynamic) or all load steps (static). Frame 0 is the initial
     /// state; then every output_every-th step and the last (every load step when static).
+    /// With contact enabled, detection runs on the initial state and after every step.
     /// @throws NumericalError prefixed with "step N: " when the simulation diverges
     RunSummary run(Index steps, const FrameCallback& on_frame, const ProgressCallback& on_progress);
 
+    ~Simulation();
+    Simulation(const Simulation&) = delete;
+    Simulation& operator=(const Simulation&) = delete;
+
 private:
+    void detect(RunSummary& summary);
     void dynamic_step(RunSummary& summary);
     void static_step(Index load_step, RunSummary& summary);
 
     Scene& m_scene;
     const CaseSpec& m_spec;
+    struct EmbreeCheck;
+    std::unique_ptr<EmbreeCheck> m_embree; // cross-check scenes, when asked for
 };
 
 /// PCG settings from the case's [solver] table.

@@ -1,0 +1,49 @@
+#pragma once
+/// @file scene_contact.hpp
+/// @brief Contact detection on a scene: one contact surface per body, kept in step with the
+/// bodies, and the per-node view of the result that frames show.
+
+#include <corocontact/contact/contact_surface.hpp>
+#include <corocontact/contact/detector.hpp>
+#include <corocontact/sim/case_spec.hpp>
+
+#include <vector>
+
+namespace coro {
+
+class Body;
+
+/// The boundary surface of a body as contact detection sees it; source_id holds the input
+/// (mesh file) node index of every surface vertex.
+ContactSurface make_contact_surface(const Body& body);
+
+/// Contact surfaces of all bodies, one per body in body order.
+std::vector<ContactSurface> make_contact_surfaces(const std::vector<Body>& bodies);
+
+/// Moves every surface to its body's current positions and refits its tree.
+void update_contact_surfaces(const std::vector<Body>& bodies, std::vector<ContactSurface>& surfaces);
+
+/// Detection settings from the case's [contact] table.
+DetectionSettings detection_settings(const ContactSettings& contact);
+
+/// Per-node contact state of one body in internal node order: inside (0/1) and depth [m]
+/// (the deepest over the other bodies), #V each.
+struct NodeContact {
+    std::vector<char> inside;
+    VecX depth;
+};
+
+/// Spreads detected contact points onto the nodes of every body.
+/// @param[in] surfaces  one per body, as used for detection
+/// @param[in] points    detect_contacts() output
+/// @param[in] num_vertices  #V of every body
+std::vector<NodeContact> node_contacts(const std::vector<ContactSurface>& surfaces,
+                                       const std::vector<ContactPoint>& points,
+                                       const std::vector<Index>& num_vertices);
+
+/// The `detect` CSV: header `body,vertex,other,depth`, one row per surface vertex found inside
+/// another body; `vertex` is the input node index; rows sorted by body order, then vertex,
+/// then other. Depths are written with 17 significant digits.
+std::string contacts_csv(const std::vector<ContactSurface>& surfaces, const std::vector<ContactPoint>& points);
+
+} // namespace coro

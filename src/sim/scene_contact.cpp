@@ -1,0 +1,81 @@
+#include <corocontact/sim/scene_contact.hpp>
+
+#include <corocontact/core/surface_mesh.hpp>
+#include <corocontact/sim/body.hpp>
+
+#include <algorithm>
+#include <cstdio>
+#include <sstream>
+#include <tuple>
+
+namespace coro {
+
+ContactSurface make_contact_surface(const Body& body)
+{
+    ContactSurface surface =
+        ContactSurface::from_body(body.name(), as_positions(body.positions()), boundary_faces(body.mesh()));
+    // from_body numbers the body's (internal) nodes; the user sees input node indices.
+    for (Index& id : surface.source_id)
+        id = body.input_node(id);
+    return surface;
+}
+
+std::vector<ContactSurface> make_contact_surfaces(const std::vector<Body>& bodies)
+{
+    std::vector<ContactSurface> surfaces;
+    surfaces.reserve(bodies.size());
+    for (const Body& body : bodies)
+        surfaces.push_back(make_contact_surface(body));
+    return surfaces;
+}
+
+void update_contact_surfaces(const std::vector<Body>& bodies, std::vector<ContactSurface>& surfaces)
+{
+    for (std::size_t b = 0; b < bodies.size(); ++b)
+        surfaces[b].update(as_positions(bodies[b].positions()));
+}
+
+DetectionSettings detection_settings(const ContactSettings& contact)
+{
+    DetectionSettings settings;
+    settings.mode = contact.mode == ContactMode::PAPER ? DetectionMode::PAPER : DetectionMode::EXACT;
+    return settings;
+}
+
+std::vector<NodeContact> node_contacts(const std::vector<ContactSurface>& surfaces,
+                                       const std::vector<ContactPoint>& points, const std::vector<Index>& num_vertices)
+{
+    std::vector<NodeContact> nodes(num_vertices.size());
+    for (std::size_t b = 0; b < num_vertices.size(); ++b) {
+        nodes[b].inside.assign(static_cast<std::size_t>(num_vertices[b]), 0);
+        nodes[b].depth = VecX::Zero(num_vertices[b]);
+    }
+    for (const ContactPoint& point : points) {
+        const auto b = static_cast<std::size_t>(point.body);
+        const Index node = surfaces[b].body_node[static_cast<std::size_t>(point.vertex)];
+        nodes[b].inside[static_cast<std::size_t>(node)] = 1;
+        nodes[b].depth[node] = std::max(nodes[b].depth[node], point.depth);
+    }
+    return nodes;
+}
+
+std::string contacts_csv(const std::vector<ContactSurface>& surfaces, const std::vector<ContactPoint>& points)
+{
+    std::vector<std::tuple<Index, Index, Index, double>> rows;
+    rows.reserve(points.size());
+    for (const ContactPoint& p : points)
+        rows.emplace_back(p.body, surfaces[static_cast<std::size_t>(p.body)].source_id[static_cast<std::size_t>(p.vertex)],
+                          p.other, p.depth);
+    std::sort(rows.begin(), rows.end());
+    std::ostringstream csv;
+    csv << "body,vertex,other,depth\n";
+    char depth[32];
+    for (const auto& [body, vertex, other, d] : rows) {
+        std::snprintf(depth, sizeof depth, "%.17g", d);
+        csv << surfaces[static_cast<std::size_t>(body)].name << ',' << vertex << ','
+            << surfaces[static_cast<std::size_t>(other)].name << ',' << depth << '\n';
+    }
+    return csv.str();
+}
+
+} // namespace coro
