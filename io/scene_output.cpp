@@ -26,7 +26,8 @@ std::vector<FrameBlock> scene_frame(const Scene& scene)
         FrameBlock block;
         block.name = body.name();
         block.points.resize(n_vertices, 3);
-        Eigen::MatrixXd u(n_vertices, 3), v(n_vertices, 3), inside(n_vertices, 1), depth(n_vertices, 1);
+        Eigen::MatrixXd u(n_vertices, 3), v(n_vertices, 3), inside(n_vertices, 1), depth(n_vertices, 1),
+            force = Eigen::MatrixXd::Zero(n_vertices, 3);
         for (Index i = 0; i < n_vertices; ++i) {
             const Index row = body.input_node(i);
             block.points.row(row) = body.positions().segment<3>(3 * i).transpose();
@@ -34,6 +35,8 @@ std::vector<FrameBlock> scene_frame(const Scene& scene)
             v.row(row) = body.velocities().segment<3>(3 * i).transpose();
             inside(row, 0) = contact[b].inside[static_cast<std::size_t>(i)];
             depth(row, 0) = contact[b].depth[i];
+            if (b < scene.contact_forces.size())
+                force.row(row) = scene.contact_forces[b].segment<3>(3 * i).transpose();
         }
         block.tets.resize(n_tets, 4);
         Eigen::MatrixXd von_mises(n_tets, 1), partition(n_tets, 1);
@@ -48,6 +51,7 @@ std::vector<FrameBlock> scene_frame(const Scene& scene)
         block.point_data.push_back({"velocity", std::move(v)});
         block.point_data.push_back({"contact_inside", std::move(inside)});
         block.point_data.push_back({"contact_depth", std::move(depth)});
+        block.point_data.push_back({"contact_force", std::move(force)});
         block.cell_data.push_back({"von_mises", std::move(von_mises)});
         block.cell_data.push_back({"partition", std::move(partition)});
         blocks.push_back(std::move(block));

@@ -61,11 +61,19 @@ std::vector<NodeContact> node_contacts(const std::vector<ContactSurface>& surfac
 
 std::string contacts_csv(const std::vector<ContactSurface>& surfaces, const std::vector<ContactPoint>& points)
 {
+    // Plane obstacles (other < 0) sort after the bodies, named obstacle<k>.
+    const auto other_key = [&](Index other) {
+        return other >= 0 ? other : static_cast<Index>(surfaces.size()) + (-1 - other);
+    };
+    const auto other_name = [&](Index key) {
+        return key < static_cast<Index>(surfaces.size()) ? surfaces[static_cast<std::size_t>(key)].name
+                                                          : "obstacle" + std::to_string(key - static_cast<Index>(surfaces.size()));
+    };
     std::vector<std::tuple<Index, Index, Index, double>> rows;
     rows.reserve(points.size());
     for (const ContactPoint& p : points)
         rows.emplace_back(p.body, surfaces[static_cast<std::size_t>(p.body)].source_id[static_cast<std::size_t>(p.vertex)],
-                          p.other, p.depth);
+                          other_key(p.other), p.depth);
     std::sort(rows.begin(), rows.end());
     std::ostringstream csv;
     csv << "body,vertex,other,depth\n";
@@ -73,7 +81,7 @@ std::string contacts_csv(const std::vector<ContactSurface>& surfaces, const std:
     for (const auto& [body, vertex, other, d] : rows) {
         std::snprintf(depth, sizeof depth, "%.17g", d);
         csv << surfaces[static_cast<std::size_t>(body)].name << ',' << vertex << ','
-            << surfaces[static_cast<std::size_t>(other)].name << ',' << depth << '\n';
+            << other_name(other) << ',' << depth << '\n';
     }
     return csv.str();
 }

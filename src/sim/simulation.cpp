@@ -2,6 +2,7 @@
 
 #include <corocontact/config.hpp>
 #include <corocontact/core/error.hpp>
+#include <corocontact/sim/contact_step.hpp>
 #include <corocontact/sim/integrator.hpp>
 #include <corocontact/sim/scene_contact.hpp>
 #include <corocontact/sim/static_solver.hpp>
@@ -11,6 +12,7 @@
 #endif
 
 #include <algorithm>
+#include <tuple>
 #include <chrono>
 #include <string>
 
@@ -57,6 +59,9 @@ Simulation::Simulation(Scene& scene, const CaseSpec& spec) : m_scene(scene), m_s
     if (!spec.contact.enabled)
         return;
     m_scene.surfaces = make_contact_surfaces(m_scene.bodies);
+    for (const ObstacleSpec& obstacle : spec.obstacles)
+        if (obstacle.type == ObstacleType::PLANE)
+            m_scene.planes.push_back({obstacle.point, obstacle.normal.normalized()});
     if (spec.contact.cross_check == CrossCheck::EMBREE) {
 #if CORO_WITH_EMBREE
         m_embree = std::make_unique<EmbreeCheck>(m_scene.surfaces);
@@ -76,6 +81,17 @@ void Simulation::detect(RunSummary& summary)
     ScopedTimer timer(summary.phases.contact);
     update_contact_surfaces(m_scene.bodies, m_scene.surfaces);
     m_scene.contacts = detect_contacts(m_scene.surfaces, detection_settings(m_spec.contact));
+    if (!m_scene.planes.empty()) {
+        std::vector<ContactPoint> planes = detect_plane_contacts(
+            m_scene.surfaces, static_cast<Index>(m_scene.bodies.size()), m_scene.planes);
+        m_scene.contacts.insert(m_scene.contacts.end(), planes.begin(), planes.end());
+        std::sort(m_scene.contacts.begin(), m_scene.contacts.end(), [](const ContactPoint& a, const ContactPoint& b) {
+            return std::tie(a.body, a.vertex, a.other) < std::tie(b.body, b.vertex, b.other);
+        });
+    }
+    m_response = contact_response(m_scene.bodies, m_scene.surfaces, m_scene.contacts, m_spec.contact,
+                                  m_spec.simulation.dt);
+    m_scene.contact_forces = m_response.forces;
     ++summary.detections;
     summary.contacts_mean += static_cast<double>(m_scene.contacts.size());
     for (const ContactPoint& point : m_scene.contacts)
@@ -93,6 +109,16 @@ void Simulation::detect(RunSummary& summary)
 void Simulation::dynamic_step(RunSummary& summary)
 {
     const PcgSettings settings = pcg_settings(m_spec.solver);
+    if (m_spec.contact.enabled) {
+        for (const PcgResult& result : implicit_euler_step_with_contact(
+                 m_scene.bodies, m_response, m_spec.simulation.dt, m_spec.simulation.gravity, settings, summary.phases)) {
+            ++summary.solves;
+            summary.cg_iterations_mean += result.iterations;
+            summary.cg_residual_mean += result.residual;
+            summary.solves_not_converged += result.converged ? 0 : 1;
+        }
+        return;
+    }
     for (Body& body : m_scene.bodies) {
         const PcgResult result = implicit_euler_step(body, m_spec.simulation.dt, m_spec.simulation.gravity,
                                                      settings, summary.phases);

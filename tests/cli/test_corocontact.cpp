@@ -229,6 +229,30 @@ young = 2e4
     EXPECT_EQ(compared, 1 + 3 + 3 * 2); // pvd, 3 vtm, 3 × 2 vtu
 }
 
+TEST(CorocontactRun, OneAndTwoThreadsWriteIdenticalFramesThroughAnImpact)
+{
+    // The default case through the first 70 steps: the spheres touch at about step 20.
+    const fs::path dir = coro::test::scratch_dir("cli_threads_contact");
+    const std::string case_file = std::string(CORO_CASES_DIR) + "/two_spheres/two_spheres.toml";
+    for (const char* threads : {"1", "2"}) {
+        const Outcome outcome = run("run " + case_file + " --steps 70 --quiet --threads " + threads + " --out " +
+                                        (dir / ("t" + std::string(threads))).string(),
+                                    dir);
+        ASSERT_EQ(outcome.exit_code, 0) << outcome.err;
+        EXPECT_THAT(outcome.out, HasSubstr("contact:"));
+    }
+    int compared = 0;
+    for (const auto& entry : fs::recursive_directory_iterator(dir / "t1")) {
+        if (!entry.is_regular_file() || entry.path().extension() == ".json")
+            continue;
+        EXPECT_EQ(slurp(entry.path()), slurp(dir / "t2" / fs::relative(entry.path(), dir / "t1"))) << entry.path();
+        ++compared;
+    }
+    EXPECT_GT(compared, 20);
+    const std::string summary = slurp(dir / "t1" / "two_spheres.summary.json");
+    EXPECT_THAT(summary, ::testing::Not(HasSubstr("\"max_contact_depth\": 0,")));
+}
+
 TEST(CorocontactRun, FramePointsKeepTheMeshFileNodeOrder)
 {
     const fs::path dir = coro::test::scratch_dir("cli_order");

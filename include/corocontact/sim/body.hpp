@@ -62,6 +62,7 @@ public:
 
     /// System matrix storage (pattern built once, values refilled by the solvers).
     BsrMatrix& system_matrix() { return m_system; }
+    const BsrMatrix& system_matrix() const { return m_system; }
     /// The body's PCG solver (keeps its work vectors between steps).
     PcgSolver& pcg() { return m_pcg; }
 

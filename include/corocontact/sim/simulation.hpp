@@ -6,6 +6,8 @@
 #include <corocontact/sim/case_spec.hpp>
 #include <corocontact/contact/contact_surface.hpp>
 #include <corocontact/contact/detector.hpp>
+#include <corocontact/contact/plane_obstacle.hpp>
+#include <corocontact/sim/contact_response.hpp>
 #include <corocontact/sim/phase_times.hpp>
 #include <corocontact/solver/pcg.hpp>
 
@@ -20,6 +22,8 @@ struct Scene {
     std::vector<Body> bodies;
     std::vector<ContactSurface> surfaces; ///< one per body when contact is enabled, else empty
     std::vector<ContactPoint> contacts;   ///< the last detection, sorted by (body, vertex, other)
+    std::vector<PlaneObstacle> planes;    ///< rigid half-space obstacles
+    std::vector<VecX> contact_forces;     ///< per body #3V: contact forces of the last detection [N]
 
     Index num_tets() const;
     Index num_vertices() const;
@@ -76,6 +80,7 @@ private:
     const CaseSpec& m_spec;
     struct EmbreeCheck;
     std::unique_ptr<EmbreeCheck> m_embree; // cross-check scenes, when asked for
+    ContactResponse m_response;            // of the last detection, used by the next step
 };
 
 /// PCG settings from the case's [solver] table.

@@ -1,0 +1,49 @@
+#pragma once
+/// @file contact_response.hpp
+/// @brief Penalty contact response (DESIGN.md, Contact response): forces and the matrix terms
+/// they add to one linearly implicit Euler step.
+///
+/// A contact couples the nodes that carry its two points: the penetrating vertex (share −1)
+/// and the barycentric point of the other body's face (shares w_i), or a rigid obstacle. With
+/// c the shares, n the other surface's outward normal and g ≥ 0 the depth, the gap is
+/// g = n·Σ c_k x_k; the penetrating side gets F = k g n + c_n (n·u) n + F_t with u = Σ c_k v_k,
+/// and node k gets −c_k F, so the forces of a contact sum to zero. Implicit Euler linearises
+/// F around the step start: h² k (c cᵀ ⊗ n nᵀ) and h c_n (c cᵀ ⊗ n nᵀ) enter the matrix.
+/// Friction is regularised Coulomb: |F_t| = μ k g opposing the tangential slip u_t; below
+/// the regularisation speed ε the contact sticks through an implicit tangential damping
+/// h μ k g / ε (c cᵀ ⊗ (I − n nᵀ)), above it the slip force is explicit.
+
+#include <corocontact/contact/contact_surface.hpp>
+#include <corocontact/contact/detector.hpp>
+#include <corocontact/sim/body.hpp>
+#include <corocontact/sim/case_spec.hpp>
+
+#include <vector>
+
+namespace coro {
+
+/// Speed [m/s] below which friction sticks (regularised Coulomb).
+constexpr double FRICTION_STICK_SPEED = 1e-3;
+
+/// What contact adds to one implicit Euler step of the scene.
+struct ContactResponse {
+    /// Per body, #3V: explicit contact forces at the step start (penalty and slipping friction) [N].
+    std::vector<VecX> forces;
+    /// A 3×3 term of the system matrix between node `row` of body `body_row` and node `col` of
+    /// body `body_col`, already scaled by h² or h.
+    struct Block {
+        Index body_row, row, body_col, col;
+        Mat3 value;
+    };
+    std::vector<Block> blocks; ///< in contact order, then share order (deterministic)
+};
+
+/// Builds the response of every contact point.
+/// @param[in] surfaces  surfaces of the bodies (same order), then of static obstacles
+/// @param[in] contacts  detection output; other < 0 marks a plane obstacle (see plane_obstacle.hpp)
+/// @param[in] dt        the step h [s]
+ContactResponse contact_response(const std::vector<Body>& bodies, const std::vector<ContactSurface>& surfaces,
+                                 const std::vector<ContactPoint>& contacts, const ContactSettings& settings,
+                                 double dt);
+
+} // namespace coro

@@ -1,0 +1,71 @@
+#include <corocontact/sim/contact_response.hpp>
+
+#include <algorithm>
+#include <array>
+
+namespace coro {
+
+namespace {
+struct Share {
+    Index body;
+    Index node;
+    double coefficient;
+};
+} // namespace
+
+ContactResponse contact_response(const std::vector<Body>& bodies, const std::vector<ContactSurface>& surfaces,
+                                 const std::vector<ContactPoint>& contacts, const ContactSettings& settings,
+                                 double dt)
+{
+    const auto n_bodies = static_cast<Index>(bodies.size());
+    ContactResponse response;
+    response.forces.reserve(bodies.size());
+    for (const Body& body : bodies)
+        response.forces.push_back(VecX::Zero(3 * body.num_vertices()));
+
+    const double k = settings.stiffness;
+    std::array<Share, 4> shares{};
+    for (const ContactPoint& contact : contacts) {
+        // Who carries the two points of this contact.
+        int count = 0;
+        const ContactSurface& own = surfaces[static_cast<std::size_t>(contact.body)];
+        shares[static_cast<std::size_t>(count++)] = {contact.body, own.body_node[static_cast<std::size_t>(contact.vertex)], -1.0};
+        if (contact.other >= 0 && contact.other < n_bodies && contact.face >= 0) {
+            const ContactSurface& other = surfaces[static_cast<std::size_t>(contact.other)];
+            for (int i = 0; i < 3; ++i)
+                shares[static_cast<std::size_t>(count++)] = {
+                    contact.other, other.body_node[static_cast<std::size_t>(other.faces(contact.face, i))],
+                    contact.barycentric[i]};
+        }
+        const Vec3& n = contact.normal;
+        Vec3 u = Vec3::Zero(); // velocity of the other side relative to the penetrating vertex
+        for (int s = 0; s < count; ++s) {
+            const Share& share = shares[static_cast<std::size_t>(s)];
+            u += share.coefficient * bodies[static_cast<std::size_t>(share.body)].velocities().segment<3>(3 * share.node);
+        }
+        const double normal_force = k * contact.depth;
+        Vec3 force = normal_force * n; // on the penetrating side
+        Mat3 matrix = (dt * dt * k + dt * settings.damping) * n * n.transpose();
+        if (settings.friction > 0.0) {
+            const Mat3 tangential = Mat3::Identity() - n * n.transpose();
+            const Vec3 slip = tangential * u;
+            const double speed = slip.norm();
+            if (speed >= FRICTION_STICK_SPEED)
+                force += settings.friction * normal_force * slip / speed;
+            else
+                matrix += dt * settings.friction * normal_force / FRICTION_STICK_SPEED * tangential;
+        }
+        for (int r = 0; r < count; ++r) {
+            const Share& row = shares[static_cast<std::size_t>(r)];
+            response.forces[static_cast<std::size_t>(row.body)].segment<3>(3 * row.node) -= row.coefficient * force;
+            for (int c = 0; c < count; ++c) {
+                const Share& col = shares[static_cast<std::size_t>(c)];
+                response.blocks.push_back({row.body, row.node, col.body, col.node,
+                                           row.coefficient * col.coefficient * matrix});
+            }
+        }
+    }
+    return response;
+}
+
+} // namespace coro
