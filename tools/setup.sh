@@ -25,6 +25,7 @@ packages=(
   libvtk9-dev libcli11-dev libtomlplusplus-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   calculix-ccx python3-matplotlib
+  python3-vtk9 python3-numpy xvfb xauth libgl1-mesa-dri
 )
 
 missing=()

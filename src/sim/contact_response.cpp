@@ -47,13 +47,13 @@ ContactResponse contact_response(const std::vector<Body>& bodies, const std::vec
         Vec3 force = normal_force * n; // on the penetrating side
         Mat3 matrix = (dt * dt * k + dt * settings.damping) * n * n.transpose();
         if (settings.friction > 0.0) {
+            // Implicit, lagged friction: F_t = η u_t⁺ with η = μ f_n / max(|u_t|, ε) taken at the
+            // step start. A slipping contact keeps |F_t| ≈ μ f_n, a stuck one is held by a stiff
+            // tangential damper, and neither can reverse the slip within a step (an explicit
+            // μ f_n on a light vertex can, and then chatters).
             const Mat3 tangential = Mat3::Identity() - n * n.transpose();
-            const Vec3 slip = tangential * u;
-            const double speed = slip.norm();
-            if (speed >= FRICTION_STICK_SPEED)
-                force += settings.friction * normal_force * slip / speed;
-            else
-                matrix += dt * settings.friction * normal_force / FRICTION_STICK_SPEED * tangential;
+            const double speed = (tangential * u).norm();
+            matrix += dt * settings.friction * normal_force / std::max(speed, FRICTION_STICK_SPEED) * tangential;
         }
         for (int r = 0; r < count; ++r) {
             const Share& row = shares[static_cast<std::size_t>(r)];

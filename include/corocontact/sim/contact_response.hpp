@@ -9,9 +9,9 @@
 /// g = n·Σ c_k x_k; the penetrating side gets F = k g n + c_n (n·u) n + F_t with u = Σ c_k v_k,
 /// and node k gets −c_k F, so the forces of a contact sum to zero. Implicit Euler linearises
 /// F around the step start: h² k (c cᵀ ⊗ n nᵀ) and h c_n (c cᵀ ⊗ n nᵀ) enter the matrix.
-/// Friction is regularised Coulomb: |F_t| = μ k g opposing the tangential slip u_t; below
-/// the regularisation speed ε the contact sticks through an implicit tangential damping
-/// h μ k g / ε (c cᵀ ⊗ (I − n nᵀ)), above it the slip force is explicit.
+/// Friction is regularised Coulomb, implicit with a lagged coefficient: F_t = η u_t⁺ with
+/// η = μ k g / max(|u_t|, ε) from the step start, i.e. h η (c cᵀ ⊗ (I − n nᵀ)) in the matrix:
+/// a slipping contact feels |F_t| ≈ μ k g against its slip, one slower than ε sticks.
 
 #include <corocontact/contact/contact_surface.hpp>
 #include <corocontact/contact/detector.hpp>
@@ -27,7 +27,7 @@ constexpr double FRICTION_STICK_SPEED = 1e-3;
 
 /// What contact adds to one implicit Euler step of the scene.
 struct ContactResponse {
-    /// Per body, #3V: explicit contact forces at the step start (penalty and slipping friction) [N].
+    /// Per body, #3V: explicit contact forces at the step start (penalty) [N].
     std::vector<VecX> forces;
     /// A 3×3 term of the system matrix between node `row` of body `body_row` and node `col` of
     /// body `body_col`, already scaled by h² or h.
