@@ -158,6 +158,25 @@ void BM_EmbreeFrame(benchmark::State& state)
     label(state, sc, build_name(build_of(state)));
 }
 
+/// BM_EmbreeFrame without depth and normal (contact_data off): refit, Embree update, inside tests.
+void BM_EmbreeFrameInsideOnly(benchmark::State& state)
+{
+    const Scene& sc = scene(static_cast<Index>(state.range(0)));
+    std::vector<ContactSurface> surfaces = sc.surfaces[0];
+    detail::EmbreeSceneSet scenes(surfaces, build_of(state));
+    DetectionSettings settings;
+    settings.contact_data = false;
+    int frame = 0;
+    for (auto _ : state) {
+        frame = (frame + 1) % FRAMES;
+        for (std::size_t b = 0; b < surfaces.size(); ++b)
+            surfaces[b].update(sc.frames[static_cast<std::size_t>(frame)][b]);
+        scenes.update(surfaces);
+        benchmark::DoNotOptimize(detail::detect_contacts_embree(surfaces, scenes, settings, nullptr, nullptr));
+    }
+    label(state, sc, (std::string(build_name(build_of(state))) + ", inside only").c_str());
+}
+
 /// Plain first-hit rays (no filter, +x) from the candidate vertices: Embree's raw ray rate.
 void BM_EmbreeFirstHitRays(benchmark::State& state)
 {
@@ -276,6 +295,23 @@ void BM_AxisRayFrame(benchmark::State& state)
     label(state, sc, "axis-ray exact");
 }
 
+/// BM_AxisRayFrame without depth and normal: refit and the exact inside tests.
+void BM_AxisRayFrameInsideOnly(benchmark::State& state)
+{
+    const Scene& sc = scene(static_cast<Index>(state.range(0)));
+    std::vector<ContactSurface> surfaces = sc.surfaces[0];
+    DetectionSettings settings;
+    settings.contact_data = false;
+    int frame = 0;
+    for (auto _ : state) {
+        frame = (frame + 1) % FRAMES;
+        for (std::size_t b = 0; b < surfaces.size(); ++b)
+            surfaces[b].update(sc.frames[static_cast<std::size_t>(frame)][b]);
+        benchmark::DoNotOptimize(detect_contacts(surfaces, settings));
+    }
+    label(state, sc, "axis-ray exact, inside only");
+}
+
 void embree_args(benchmark::internal::Benchmark* b)
 {
     for (int res : {12, 26})
@@ -292,12 +328,14 @@ void sizes(benchmark::internal::Benchmark* b)
 BENCHMARK(BM_EmbreeUpdate)->Apply(embree_args)->UseRealTime()->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_EmbreeDetect)->Apply(embree_args)->UseRealTime()->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_EmbreeFrame)->Apply(embree_args)->UseRealTime()->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_EmbreeFrameInsideOnly)->Apply(embree_args)->UseRealTime()->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_EmbreeFirstHitRays)->Args({12, 0})->Args({26, 0})->Args({26, 2})->UseRealTime()->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_EmbreeInsideTests)->Args({12, 0})->Args({26, 0})->Args({26, 2})->UseRealTime()->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_PipelineWithoutNarrowPhase)->Apply(sizes)->UseRealTime()->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_AxisRayRefit)->Apply(sizes)->UseRealTime()->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_AxisRayDetect)->Apply(sizes)->UseRealTime()->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_AxisRayFrame)->Apply(sizes)->UseRealTime()->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_AxisRayFrameInsideOnly)->Apply(sizes)->UseRealTime()->Unit(benchmark::kMicrosecond);
 
 } // namespace
 

@@ -5,6 +5,8 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include <emmintrin.h>
+
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -27,6 +29,31 @@ TrianglePoint closest_point_on_segment(const Vec3& p, const Vec3& a, const Vec3&
     const double len2 = ab.squaredNorm();
     const double s = len2 > 0.0 ? std::clamp((p - a).dot(ab) / len2, 0.0, 1.0) : 0.0;
     return {a + s * ab, Vec3(1.0 - s, s, 0.0)};
+}
+
+/// Is triangle (A, B, C) certainly farther from `p` than √`best_d2`? Its plane's distance is a
+/// lower bound of its distance; the test allows for the rounding of every quantity with a wide
+/// margin, so it says yes only when the exact search's squared distance of the face would not be
+/// below `best_d2` either (it only saves closest_point_on_triangle calls, never changes a result).
+bool beyond_plane(const Vec3& p, const double* A, const double* B, const double* C, double best_d)
+{
+    const double e1[3] = {B[0] - A[0], B[1] - A[1], B[2] - A[2]};
+    const double e2[3] = {C[0] - A[0], C[1] - A[1], C[2] - A[2]};
+    const double q[3] = {p[0] - A[0], p[1] - A[1], p[2] - A[2]};
+    const double n[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
+    const double num = n[0] * q[0] + n[1] * q[1] + n[2] * q[2];
+    const double nn = n[0] * n[0] + n[1] * n[1] + n[2] * n[2];
+    // |error of num| ≤ a few ε · Σ|e1||e2||q| (products of the exact inputs' differences).
+    const double scale = (std::abs(e1[0]) + std::abs(e1[1]) + std::abs(e1[2])) *
+                         (std::abs(e2[0]) + std::abs(e2[1]) + std::abs(e2[2])) *
+                         (std::abs(q[0]) + std::abs(q[1]) + std::abs(q[2]));
+    const double lower = std::abs(num) - 1e-12 * scale;
+    // The computed distance of a face may err by a few ε times the coordinates' magnitude.
+    const double magnitude = std::abs(p[0]) + std::abs(p[1]) + std::abs(p[2]) + std::abs(A[0]) + std::abs(A[1]) +
+                             std::abs(A[2]) + std::abs(e1[0]) + std::abs(e1[1]) + std::abs(e1[2]) + std::abs(e2[0]) +
+                             std::abs(e2[1]) + std::abs(e2[2]);
+    const double reach = best_d * (1.0 + 1e-7) + 1e-13 * magnitude;
+    return lower > 0.0 && lower * lower > nn * (reach * reach) * (1.0 + 1e-9);
 }
 
 } // namespace
@@ -333,18 +360,48 @@ void AabbTree::vertices_in_box(CRef<Positions> vertices, const Aabb& box, std::v
 
 AabbTree::Nearest AabbTree::nearest(CRef<Positions> vertices, const Vec3& point) const
 {
+    return nearest(vertices, point, std::numeric_limits<double>::infinity(), -1);
+}
+
+AabbTree::Nearest AabbTree::nearest(CRef<Positions> vertices, const Vec3& point, double distance_bound,
+                                    Index hint_face) const
+{
     Nearest best;
     if (m_packed.empty())
         return best;
+    // Initial bound on the squared distance, strictly above the nearest face's computed squared
+    // distance: boxes and faces at or beyond it cannot hold the answer, everything below it is
+    // visited exactly as in an unbounded search (pruning only skips, never reorders), so the same
+    // face wins, ties included. The hint face's distance is computed with the same formula as in
+    // the search; the inflation covers the rounding of the squared distances.
+    double bound_d2 = std::numeric_limits<double>::infinity();
+    if (distance_bound < std::numeric_limits<double>::infinity())
+        bound_d2 = distance_bound * distance_bound * (1.0 + 1e-6) + std::numeric_limits<double>::min();
+    if (hint_face >= 0 && hint_face < m_faces.rows()) {
+        const TrianglePoint q = closest_point_on_triangle(point, row(vertices, m_faces(hint_face, 0)),
+                                                          row(vertices, m_faces(hint_face, 1)),
+                                                          row(vertices, m_faces(hint_face, 2)));
+        bound_d2 = std::min(bound_d2, (q.point - point).squaredNorm() * (1.0 + 1e-6) +
+                                          std::numeric_limits<double>::min());
+    }
+    // Squared distance of `point` to a float box, as Σ_k max(lo_k − p_k, p_k − hi_k, 0)² in
+    // double, k = 0, 1, 2 in this order; x and y in one SSE2 register (the same operations on
+    // each component, so the same values as the scalar loop).
+    const __m128d pxy = _mm_loadu_pd(point.data());
+    const double pz = point[2];
+    const __m128d zero = _mm_setzero_pd();
     const auto d2 = [&](const float* lo, const float* hi) {
-        double sum = 0.0;
-        for (int k = 0; k < 3; ++k) {
-            const double d = std::max(std::max(static_cast<double>(lo[k]) - point[k], point[k] - static_cast<double>(hi[k])), 0.0);
-            sum += d * d;
-        }
-        return sum;
+        const __m128d lxy = _mm_cvtps_pd(_mm_castsi128_ps(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(lo))));
+        const __m128d hxy = _mm_cvtps_pd(_mm_castsi128_ps(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(hi))));
+        const __m128d dxy = _mm_max_pd(_mm_max_pd(_mm_sub_pd(lxy, pxy), _mm_sub_pd(pxy, hxy)), zero);
+        const __m128d sxy = _mm_mul_pd(dxy, dxy);
+        const double dz = std::max(std::max(static_cast<double>(lo[2]) - pz, pz - static_cast<double>(hi[2])), 0.0);
+        return (_mm_cvtsd_f64(sxy) + _mm_cvtsd_f64(_mm_unpackhi_pd(sxy, sxy))) + dz * dz;
     };
-    double best_d2 = std::numeric_limits<double>::infinity();
+    double best_d2 = bound_d2;
+    double best_d = std::sqrt(bound_d2);
+    const double* data = vertices.data();
+    const auto stride = vertices.outerStride();
     Index stack[96];
     double stack_d2[96];
     int top = 0;
@@ -361,12 +418,17 @@ AabbTree::Nearest AabbTree::nearest(CRef<Positions> vertices, const Vec3& point)
                 if (d2(pb.min, pb.max) >= best_d2)
                     continue;
                 const Index f = m_order[static_cast<std::size_t>(i)];
-                const TrianglePoint q = closest_point_on_triangle(point, row(vertices, m_faces(f, 0)),
-                                                                  row(vertices, m_faces(f, 1)),
-                                                                  row(vertices, m_faces(f, 2)));
+                const double* A = data + stride * m_faces(f, 0);
+                const double* B = data + stride * m_faces(f, 1);
+                const double* C = data + stride * m_faces(f, 2);
+                if (beyond_plane(point, A, B, C, best_d))
+                    continue;
+                const TrianglePoint q =
+                    closest_point_on_triangle(point, Vec3(A[0], A[1], A[2]), Vec3(B[0], B[1], B[2]), Vec3(C[0], C[1], C[2]));
                 const double dq = (q.point - point).squaredNorm();
                 if (dq < best_d2) {
                     best_d2 = dq;
+                    best_d = std::sqrt(dq);
                     best.face = f;
                     best.point = q.point;
                     best.barycentric = q.barycentric;
@@ -385,6 +447,10 @@ AabbTree::Nearest AabbTree::nearest(CRef<Positions> vertices, const Vec3& point)
         stack_d2[top] = left_near ? dl : dr;
         top += (left_near ? dl : dr) < best_d2;
     }
+    if (best.face < 0) // a bound below the true distance (an invalid hint): search again without it
+        return bound_d2 < std::numeric_limits<double>::infinity()
+                   ? nearest(vertices, point, std::numeric_limits<double>::infinity(), -1)
+                   : best;
     best.distance = std::sqrt(best_d2);
     return best;
 }

@@ -110,13 +110,17 @@ public:
     /// Largest distance along the axis still of interest.
     double cutoff() const { return m_closest * m_tie; }
 
-    void add(const FaceHit& h)
+    void add(const FaceHit& h, Index face)
     {
         if (h.kind == FaceHit::MISS)
             return;
         m_any = true;
         if (h.kind != FaceHit::PARALLEL)
             m_closest = std::min(m_closest, h.distance + h.bound);
+        if (h.kind == FaceHit::CLEAN && h.distance + h.bound < m_clean_closest) {
+            m_clean_closest = h.distance + h.bound;
+            m_clean_face = face;
+        }
         if (lower(h) > cutoff())
             return;
         if (m_count == CAPACITY) {
@@ -152,6 +156,10 @@ public:
         return votes[1] > 0 ? AxisOutcome::INSIDE : AxisOutcome::OUTSIDE;
     }
 
+    /// The closest clean crossing (distance plus rounding bound, face); +∞, −1 if none.
+    double clean_closest() const { return m_clean_closest; }
+    Index clean_face() const { return m_clean_face; }
+
 private:
     static double lower(const FaceHit& h) { return h.distance - h.bound; }
     void compact()
@@ -170,27 +178,38 @@ private:
     bool m_any = false;
     bool m_overflow = false;
     double m_closest = INF;
+    double m_clean_closest = INF;
+    Index m_clean_face = -1;
     double m_tie;
 };
 
 const double* vertex_ptr(const ContactSurface& s, Index v) { return s.vertices.data() + 3 * static_cast<std::ptrdiff_t>(v); }
 
+/// Closest clean crossing of the last exact-mode axis test (see InsideTest).
+struct Crossing {
+    double bound = INF;
+    Index face = -1;
+};
+
 AxisOutcome axis_test_exact(const ContactSurface& surface, const Vec3& point, int axis,
-                            const AxisRayTolerances& tol)
+                            const AxisRayTolerances& tol, Crossing* crossing = nullptr)
 {
     const Frame f = frame_of(point, axis);
     AxisHits hits(tol.tie_relative);
     const Tris& faces = surface.faces;
     surface.tree.faces_on_axis_line(point, axis, 0.0, [&](Index face) {
         hits.add(classify_exact(vertex_ptr(surface, faces(face, 0)), vertex_ptr(surface, faces(face, 1)),
-                                vertex_ptr(surface, faces(face, 2)), f, tol));
+                                vertex_ptr(surface, faces(face, 2)), f, tol),
+                 face);
         return hits.cutoff();
     });
+    if (crossing)
+        *crossing = {hits.clean_closest(), hits.clean_face()};
     return hits.decide();
 }
 
 AxisOutcome axis_test_brute_force(const ContactSurface& surface, const Vec3& point, int axis,
-                                  const AxisRayTolerances& tol)
+                                  const AxisRayTolerances& tol, Crossing* crossing = nullptr)
 {
     const Frame f = frame_of(point, axis);
     AxisHits hits(tol.tie_relative);
@@ -203,8 +222,10 @@ AxisOutcome axis_test_brute_force(const ContactSurface& surface, const Vec3& poi
         if (f.pu < std::min({A[f.u], B[f.u], C[f.u]}) || f.pu > std::max({A[f.u], B[f.u], C[f.u]}) ||
             f.pv < std::min({A[f.v], B[f.v], C[f.v]}) || f.pv > std::max({A[f.v], B[f.v], C[f.v]}))
             continue;
-        hits.add(classify_exact(A, B, C, f, tol));
+        hits.add(classify_exact(A, B, C, f, tol), face);
     }
+    if (crossing)
+        *crossing = {hits.clean_closest(), hits.clean_face()};
     return hits.decide();
 }
 
@@ -274,12 +295,18 @@ InsideTest inside_test(const ContactSurface& surface, const Vec3& point, Detecti
         return result;
     }
     for (int axis = 0; axis < 3; ++axis) {
-        const AxisOutcome outcome = axis_test(surface, point, axis, mode, candidate_faces, tolerances);
+        Crossing crossing;
+        const AxisOutcome outcome =
+            mode == DetectionMode::EXACT         ? axis_test_exact(surface, point, axis, tolerances, &crossing)
+            : mode == DetectionMode::BRUTE_FORCE ? axis_test_brute_force(surface, point, axis, tolerances, &crossing)
+                                                 : axis_test_paper(surface, point, axis, candidate_faces, tolerances);
         switch (outcome) {
         case AxisOutcome::INSIDE:
         case AxisOutcome::OUTSIDE:
             result.inside = outcome == AxisOutcome::INSIDE;
             result.deciding_axis = axis;
+            result.surface_distance_bound = crossing.bound;
+            result.crossing_face = crossing.face;
             return result;
         case AxisOutcome::ON_SURFACE:
             result.on_surface = true;

@@ -20,7 +20,7 @@ namespace coro {
 namespace detail {
 
 std::vector<ContactPoint> detect_contacts_embree(const std::vector<ContactSurface>& surfaces,
-                                                 const EmbreeSceneSet& scenes, const DetectionSettings& /*settings*/,
+                                                 const EmbreeSceneSet& scenes, const DetectionSettings& settings,
                                                  DetectionStats* stats, EmbreeQueryCounts* counts)
 {
     CORO_CHECK(static_cast<Index>(surfaces.size()) == scenes.size(), InputError,
@@ -31,14 +31,14 @@ std::vector<ContactPoint> detect_contacts_embree(const std::vector<ContactSurfac
             [&](Index other, const Vec3& p) {
                 return scenes.inside_test(surfaces[static_cast<std::size_t>(other)], other, p);
             },
-            stats);
+            stats, settings.contact_data);
     tbb::enumerable_thread_specific<EmbreeQueryCounts> local;
     std::vector<ContactPoint> points = detect_contacts(
         surfaces,
         [&](Index other, const Vec3& p) {
             return scenes.inside_test(surfaces[static_cast<std::size_t>(other)], other, p, &local.local());
         },
-        stats);
+        stats, settings.contact_data);
     *counts = EmbreeQueryCounts{};
     for (const EmbreeQueryCounts& c : local) {
         counts->axis_tests += c.axis_tests;

@@ -223,3 +223,34 @@ TEST(AabbTree, EmptyTreeAnswersNothing)
     EXPECT_EQ(visits, 0);
     EXPECT_EQ(tree.nearest(Positions(0, 3), Vec3::Zero()).face, -1);
 }
+
+TEST(AabbTree, NearestWithHintsEqualsNearestBitForBit)
+{
+    // A sphere (faces in general position) and a structured box (many exactly tied distances).
+    std::mt19937 rng(7);
+    for (const ContactSurface& s : {surface_of(make_sphere(Vec3(0.1, -0.2, 0.05), 1.0, 8), "sphere"),
+                                    surface_of(make_box(Vec3(0, 0, 0), Vec3(1, 2, 1), {3, 6, 3}), "box")}) {
+        const Aabb box = s.tree.bounds();
+        Index previous = -1;
+        for (int q = 0; q < 400; ++q) {
+            Vec3 p = random_point(box.min.array() - 0.3, box.max.array() + 0.3, rng);
+            if (q % 4 == 0) // on the box's grid planes: ties between faces
+                p = (p * 6.0).array().round() / 6.0;
+            const AabbTree::Nearest plain = s.tree.nearest(s.vertices, p);
+            const Index random_face = std::uniform_int_distribution<Index>(0, s.tree.num_faces() - 1)(rng);
+            const double bounds[] = {std::numeric_limits<double>::infinity(), plain.distance,
+                                     plain.distance * 1.5 + 1e-3};
+            for (const double bound : bounds)
+                for (const Index hint : {Index{-1}, plain.face, random_face, previous}) {
+                    const AabbTree::Nearest hinted = s.tree.nearest(s.vertices, p, bound, hint);
+                    ASSERT_EQ(hinted.face, plain.face) << s.name << " query " << q;
+                    ASSERT_EQ(hinted.distance, plain.distance) << s.name << " query " << q;
+                    ASSERT_EQ(hinted.point, plain.point) << s.name << " query " << q;
+                    ASSERT_EQ(hinted.barycentric, plain.barycentric) << s.name << " query " << q;
+                }
+            // A bound below the true distance (a wrong hint) still gives the right answer.
+            EXPECT_EQ(s.tree.nearest(s.vertices, p, 0.5 * plain.distance, -1).face, plain.face);
+            previous = plain.face;
+        }
+    }
+}

@@ -144,6 +144,27 @@ TEST(InsideTest, SphereVerticesAgainstAnalyticSphere)
     EXPECT_GT(total_outside, 200);
 }
 
+TEST(InsideTest, DecidingCrossingBoundsTheDepth)
+{
+    // The closest clean crossing of the deciding axis is a surface point: the nearest one is no
+    // farther (the nearest-point search starts from this bound).
+    const MeshBall a = mesh_ball(Vec3(0, 0, 0), 1.0, 10, 17.0, "A");
+    const MeshBall b = mesh_ball(Vec3(0.8, 0.3, -0.2), 0.9, 10, -31.0, "B");
+    int decided = 0;
+    for (Index v = 0; v < a.surface.vertices.rows(); ++v) {
+        const Vec3 p = a.surface.vertices.row(v).transpose();
+        const InsideTest r = exact(b.surface, p);
+        if (!r.inside || r.deciding_axis > 2)
+            continue;
+        ++decided;
+        ASSERT_GE(r.crossing_face, 0);
+        ASSERT_LT(r.crossing_face, b.surface.faces.rows());
+        const double nearest = b.surface.tree.nearest(b.surface.vertices, p).distance;
+        ASSERT_GE(r.surface_distance_bound, nearest) << "vertex " << v;
+    }
+    EXPECT_GT(decided, 100);
+}
+
 TEST(InsideTest, StructuredBoxesTouchingAndOverlapping)
 {
     const BoxSpec b_spec{Vec3(0, 0, 0), Vec3(1, 1, 1), {2, 2, 2}};

@@ -74,6 +74,18 @@ public:
     /// @return face −1 for an empty tree
     Nearest nearest(CRef<Positions> vertices, const Vec3& point) const;
 
+    /// The same answer as nearest(vertices, point), bit for bit, found faster from hints that
+    /// bound the distance from above: the search starts with that bound instead of +∞, so it
+    /// skips the subtrees that cannot hold the answer. The bound is slightly inflated (relative
+    /// 10⁻⁶ on the squared distance) before use, so faces tied with the nearest one are still
+    /// visited in the same order and the same one wins.
+    /// @param[in] distance_bound  a distance that some point of the surface is known to be within
+    ///                            (e.g. a face crossing of an axis line through `point`, plus its
+    ///                            rounding bound); +∞ for none
+    /// @param[in] hint_face       a face likely near `point` (e.g. the previous query's answer),
+    ///                            −1 for none; any valid face is correct, a near one is faster
+    Nearest nearest(CRef<Positions> vertices, const Vec3& point, double distance_bound, Index hint_face) const;
+
     static constexpr Index MAX_LEAF_FACES = 4;
     static constexpr Index VERTEX_BLOCK = 32; ///< vertices per box of the vertex query
 

@@ -5,6 +5,7 @@
 
 #include <corocontact/contact/contact_surface.hpp>
 
+#include <limits>
 #include <vector>
 
 namespace coro {
@@ -69,6 +70,12 @@ struct InsideTest {
     bool inside = false;
     int deciding_axis = -1;        ///< 0..2, or 3 for the winding-number fallback, −1: no axis hit
     bool on_surface = false;       ///< exact modes: the point lies on the surface (then not inside)
+    /// Exact modes, decided by an axis: the distance along that axis to the closest clean face
+    /// crossing plus its rounding bound, so some point of the surface lies within it (an upper
+    /// bound on the depth, used to start the nearest-point search); +∞ otherwise.
+    double surface_distance_bound = std::numeric_limits<double>::infinity();
+    /// Exact modes, decided by an axis: the face of that closest clean crossing (−1 otherwise).
+    Index crossing_face = -1;
 };
 
 /// Paper mode: axes x, y, z until one has a hit (INSIDE or OUTSIDE); no hit on all three ⇒
