@@ -3,6 +3,8 @@
 #include <corocontact/core/error.hpp>
 #include <corocontact/core/primitives.hpp>
 #include <corocontact/io/mesh_readers.hpp>
+#include <corocontact/io/surface_readers.hpp>
+#include <corocontact/core/surface_mesh.hpp>
 #include <corocontact/partition/partition.hpp>
 
 #include <sstream>
@@ -59,6 +61,30 @@ LoadedScene load_scene(const CaseSpec& spec)
                                       std::to_string(unused.size()) +
                                       " nodes belong to no tet; they are held fixed");
         loaded.scene.bodies.push_back(std::move(body));
+    }
+    for (const ObstacleSpec& obstacle : spec.obstacles) {
+        if (obstacle.type == ObstacleType::PLANE) {
+            loaded.scene.planes.push_back({obstacle.point, obstacle.normal.normalized()});
+            continue;
+        }
+        SurfaceMesh surface;
+        try {
+            surface = read_surface(obstacle.mesh);
+        } catch (const InputError& error) {
+            throw InputError(obstacle.location + ": obstacle mesh " + obstacle.mesh.string() + ": " + error.what());
+        }
+        const SurfaceCheck check = check_surface(surface.faces);
+        CORO_CHECK(check.closed_and_oriented(), InputError,
+                   obstacle.location << ": obstacle mesh " << obstacle.mesh.string()
+                                     << " is not a closed, consistently oriented surface (" << check.open_edges
+                                     << " open, " << check.nonmanifold_edges << " non-manifold, "
+                                     << check.misoriented_edges << " misoriented edges)");
+        if (enclosed_volume(surface.vertices, surface.faces) < 0.0) {
+            surface.faces.col(1).swap(surface.faces.col(2));
+            loaded.warnings.push_back(obstacle.location + ": obstacle mesh " + obstacle.mesh.string() +
+                                      " had inward normals; its faces were flipped");
+        }
+        loaded.scene.obstacle_meshes.push_back(std::move(surface));
     }
     return loaded;
 }

@@ -56,6 +56,13 @@ std::vector<FrameBlock> scene_frame(const Scene& scene)
         block.cell_data.push_back({"partition", std::move(partition)});
         blocks.push_back(std::move(block));
     }
+    for (std::size_t k = 0; k < scene.obstacle_meshes.size(); ++k) {
+        FrameBlock block;
+        block.name = "obstacle" + std::to_string(k);
+        block.points = scene.obstacle_meshes[k].vertices;
+        block.tris = scene.obstacle_meshes[k].faces;
+        blocks.push_back(std::move(block));
+    }
     return blocks;
 }
 

@@ -135,12 +135,15 @@ int detect_case(const DetectOptions& options)
     coro::LoadedScene loaded = coro::load_scene(spec);
     for (const std::string& warning : loaded.warnings)
         std::cerr << "warning: " << warning << "\n";
-    const std::vector<coro::ContactSurface> surfaces = coro::make_contact_surfaces(loaded.scene.bodies);
+    const std::vector<coro::ContactSurface> surfaces = coro::make_scene_surfaces(loaded.scene);
 
     coro::DetectionStats stats;
     const auto start = std::chrono::steady_clock::now();
-    const std::vector<coro::ContactPoint> points =
+    std::vector<coro::ContactPoint> points =
         coro::detect_contacts(surfaces, coro::detection_settings(spec.contact), &stats);
+    const std::vector<coro::ContactPoint> on_planes = coro::detect_plane_contacts(
+        surfaces, static_cast<coro::Index>(loaded.scene.bodies.size()), loaded.scene.planes);
+    points.insert(points.end(), on_planes.begin(), on_planes.end());
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 
     std::FILE* report = options.csv == "-" ? stderr : stdout;

@@ -27,9 +27,12 @@ ContactResponse contact_response(const std::vector<Body>& bodies, const std::vec
     std::array<Share, 4> shares{};
     for (const ContactPoint& contact : contacts) {
         // Who carries the two points of this contact.
+        // Obstacles (surfaces after the bodies, or planes) carry no nodes.
         int count = 0;
-        const ContactSurface& own = surfaces[static_cast<std::size_t>(contact.body)];
-        shares[static_cast<std::size_t>(count++)] = {contact.body, own.body_node[static_cast<std::size_t>(contact.vertex)], -1.0};
+        if (contact.body < n_bodies) {
+            const ContactSurface& own = surfaces[static_cast<std::size_t>(contact.body)];
+            shares[static_cast<std::size_t>(count++)] = {contact.body, own.body_node[static_cast<std::size_t>(contact.vertex)], -1.0};
+        }
         if (contact.other >= 0 && contact.other < n_bodies && contact.face >= 0) {
             const ContactSurface& other = surfaces[static_cast<std::size_t>(contact.other)];
             for (int i = 0; i < 3; ++i)
@@ -37,6 +40,8 @@ ContactResponse contact_response(const std::vector<Body>& bodies, const std::vec
                     contact.other, other.body_node[static_cast<std::size_t>(other.faces(contact.face, i))],
                     contact.barycentric[i]};
         }
+        if (count == 0)
+            continue; // two obstacles
         const Vec3& n = contact.normal;
         Vec3 u = Vec3::Zero(); // velocity of the other side relative to the penetrating vertex
         for (int s = 0; s < count; ++s) {

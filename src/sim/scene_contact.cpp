@@ -2,6 +2,7 @@
 
 #include <corocontact/core/surface_mesh.hpp>
 #include <corocontact/sim/body.hpp>
+#include <corocontact/sim/simulation.hpp>
 
 #include <algorithm>
 #include <cstdio>
@@ -29,6 +30,15 @@ std::vector<ContactSurface> make_contact_surfaces(const std::vector<Body>& bodie
     return surfaces;
 }
 
+std::vector<ContactSurface> make_scene_surfaces(const Scene& scene)
+{
+    std::vector<ContactSurface> surfaces = make_contact_surfaces(scene.bodies);
+    for (std::size_t k = 0; k < scene.obstacle_meshes.size(); ++k)
+        surfaces.push_back(ContactSurface::from_body("obstacle" + std::to_string(k), scene.obstacle_meshes[k].vertices,
+                                                     scene.obstacle_meshes[k].faces));
+    return surfaces;
+}
+
 void update_contact_surfaces(const std::vector<Body>& bodies, std::vector<ContactSurface>& surfaces)
 {
     for (std::size_t b = 0; b < bodies.size(); ++b)
@@ -52,6 +62,8 @@ std::vector<NodeContact> node_contacts(const std::vector<ContactSurface>& surfac
     }
     for (const ContactPoint& point : points) {
         const auto b = static_cast<std::size_t>(point.body);
+        if (b >= nodes.size())
+            continue; // a vertex of an obstacle
         const Index node = surfaces[b].body_node[static_cast<std::size_t>(point.vertex)];
         nodes[b].inside[static_cast<std::size_t>(node)] = 1;
         nodes[b].depth[node] = std::max(nodes[b].depth[node], point.depth);
@@ -61,13 +73,13 @@ std::vector<NodeContact> node_contacts(const std::vector<ContactSurface>& surfac
 
 std::string contacts_csv(const std::vector<ContactSurface>& surfaces, const std::vector<ContactPoint>& points)
 {
-    // Plane obstacles (other < 0) sort after the bodies, named obstacle<k>.
+    // Plane obstacles (other < 0) sort after every surface and are named plane<k>.
     const auto other_key = [&](Index other) {
         return other >= 0 ? other : static_cast<Index>(surfaces.size()) + (-1 - other);
     };
     const auto other_name = [&](Index key) {
         return key < static_cast<Index>(surfaces.size()) ? surfaces[static_cast<std::size_t>(key)].name
-                                                          : "obstacle" + std::to_string(key - static_cast<Index>(surfaces.size()));
+                                                          : "plane" + std::to_string(key - static_cast<Index>(surfaces.size()));
     };
     std::vector<std::tuple<Index, Index, Index, double>> rows;
     rows.reserve(points.size());

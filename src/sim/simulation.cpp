@@ -58,10 +58,7 @@ Simulation::Simulation(Scene& scene, const CaseSpec& spec) : m_scene(scene), m_s
 {
     if (!spec.contact.enabled)
         return;
-    m_scene.surfaces = make_contact_surfaces(m_scene.bodies);
-    for (const ObstacleSpec& obstacle : spec.obstacles)
-        if (obstacle.type == ObstacleType::PLANE)
-            m_scene.planes.push_back({obstacle.point, obstacle.normal.normalized()});
+    m_scene.surfaces = make_scene_surfaces(m_scene);
     if (spec.contact.cross_check == CrossCheck::EMBREE) {
 #if CORO_WITH_EMBREE
         m_embree = std::make_unique<EmbreeCheck>(m_scene.surfaces);

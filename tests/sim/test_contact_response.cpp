@@ -1,6 +1,9 @@
 #include "near.hpp"
 
+#include <corocontact/core/primitives.hpp>
+#include <corocontact/core/surface_mesh.hpp>
 #include <corocontact/io/case_reader.hpp>
+#include <corocontact/io/surface_readers.hpp>
 #include <corocontact/io/scene_loader.hpp>
 #include <corocontact/sim/integrator.hpp>
 #include <corocontact/sim/simulation.hpp>
@@ -9,6 +12,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <string>
 
 using namespace coro;
@@ -179,6 +183,40 @@ TEST(ContactResponse, BoxRestsOnPlaneWithStaticEquilibriumPenetration)
     std::printf("resting box: mean depth %.6g m, static equilibrium %.6g m\n", depth_sum / bottom, predicted);
     EXPECT_NEAR(depth_sum / bottom, predicted, 0.01 * predicted);
     EXPECT_LT(box.velocities().cwiseAbs().maxCoeff(), 1e-3);
+}
+
+TEST(ContactResponse, BoxRestsOnAMeshObstacleAsOnAPlane)
+{
+    // The floor as a closed triangle surface (an OBJ slab) instead of a plane: same contacts,
+    // same static equilibrium depth.
+    const std::filesystem::path dir = std::filesystem::temp_directory_path() / "coro_test_mesh_obstacle";
+    std::filesystem::create_directories(dir);
+    const TetMesh slab = make_box(Vec3(-1.0, -0.3, -1.0), Vec3(1.0, 0.0, 1.0), {1, 1, 1});
+    SurfaceMesh floor;
+    floor.faces = boundary_faces(slab);
+    floor.vertices = slab.rest_positions; // every node of a 1-cell box is on its surface
+    write_obj(dir / "floor.obj", floor);
+
+    std::string text = box_on_plane(0.0, 0.0, 1e5, 5.0);
+    text = text.substr(0, text.find("[[obstacle]]")) + "[[obstacle]]\ntype = \"mesh\"\nmesh = \"" +
+           (dir / "floor.obj").string() + "\"\n";
+    LoadedCase run = load(text);
+    ASSERT_EQ(run.loaded.scene.obstacle_meshes.size(), 1u);
+    Scene& scene = run.loaded.scene;
+    Simulation simulation(scene, run.spec);
+    simulation.run(run.spec.simulation.steps, nullptr, nullptr);
+    double depth_sum = 0.0;
+    Index count = 0;
+    for (const ContactPoint& c : scene.contacts)
+        if (c.body == 0) {
+            depth_sum += c.depth;
+            ++count;
+            EXPECT_NEAR_REL(c.normal, Vec3::UnitY(), 1e-12, 0.0);
+        }
+    ASSERT_EQ(count, 9);
+    const double predicted = scene.bodies[0].fem().lumped_masses().sum() * 9.81 / (1e5 * count);
+    std::printf("box on a mesh obstacle: mean depth %.6g m, static equilibrium %.6g m\n", depth_sum / count, predicted);
+    EXPECT_NEAR(depth_sum / count, predicted, 0.01 * predicted);
 }
 
 TEST(ContactResponse, FrictionSticksBelowAndSlidesAboveTheFrictionAngle)

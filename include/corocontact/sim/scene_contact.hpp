@@ -20,7 +20,14 @@ ContactSurface make_contact_surface(const Body& body);
 /// Contact surfaces of all bodies, one per body in body order.
 std::vector<ContactSurface> make_contact_surfaces(const std::vector<Body>& bodies);
 
-/// Moves every surface to its body's current positions and refits its tree.
+struct Scene;
+
+/// The bodies' contact surfaces (body order), then one static surface per mesh obstacle,
+/// named obstacle<k> in obstacle-mesh order.
+std::vector<ContactSurface> make_scene_surfaces(const Scene& scene);
+
+/// Moves every body's surface (the first #bodies) to its body's current positions and refits
+/// its tree; obstacle surfaces stay where they are.
 void update_contact_surfaces(const std::vector<Body>& bodies, std::vector<ContactSurface>& surfaces);
 
 /// Detection settings from the case's [contact] table.
@@ -33,7 +40,8 @@ struct NodeContact {
     VecX depth;
 };
 
-/// Spreads detected contact points onto the nodes of every body.
+/// Spreads detected contact points onto the nodes of every body (points of obstacle surfaces
+/// are skipped).
 /// @param[in] surfaces  one per body, as used for detection
 /// @param[in] points    detect_contacts() output
 /// @param[in] num_vertices  #V of every body

@@ -7,6 +7,7 @@
 #include <corocontact/contact/contact_surface.hpp>
 #include <corocontact/contact/detector.hpp>
 #include <corocontact/contact/plane_obstacle.hpp>
+#include <corocontact/core/surface_mesh.hpp>
 #include <corocontact/sim/contact_response.hpp>
 #include <corocontact/sim/phase_times.hpp>
 #include <corocontact/solver/pcg.hpp>
@@ -20,9 +21,11 @@ namespace coro {
 /// All bodies of a case, and what contact detection last found.
 struct Scene {
     std::vector<Body> bodies;
-    std::vector<ContactSurface> surfaces; ///< one per body when contact is enabled, else empty
+    std::vector<ContactSurface> surfaces; ///< with contact: one per body (body order), then one per
+                                          ///< mesh obstacle; else empty
+    std::vector<SurfaceMesh> obstacle_meshes; ///< rigid, static closed surfaces (mesh obstacles)
     std::vector<ContactPoint> contacts;   ///< the last detection, sorted by (body, vertex, other)
-    std::vector<PlaneObstacle> planes;    ///< rigid half-space obstacles
+    std::vector<PlaneObstacle> planes;    ///< rigid half-space obstacles (plane obstacles)
     std::vector<VecX> contact_forces;     ///< per body #3V: contact forces of the last detection [N]
 
     Index num_tets() const;
