@@ -51,6 +51,10 @@ LoadedScene load_scene(const CaseSpec& spec)
 {
     LoadedScene loaded;
     for (const BodySpec& body_spec : spec.bodies) {
+        CORO_CHECK(body_spec.surface.empty(), InputError,
+                   body_spec.location << ": body '" << body_spec.name << "': surface = \"" << body_spec.surface.string()
+                                      << "\": embedded contact surfaces are not available in this version; remove the key "
+                                         "(the body's own boundary is its contact surface)");
         const TetMesh mesh = load_body_mesh(body_spec, loaded.warnings);
         Body body(mesh, body_spec, default_num_parts(mesh.num_tets(), spec.solver.parts_per_thread));
         const std::vector<Index> unused = unreferenced_vertices(body.mesh());
