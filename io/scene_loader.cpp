@@ -51,12 +51,19 @@ LoadedScene load_scene(const CaseSpec& spec)
 {
     LoadedScene loaded;
     for (const BodySpec& body_spec : spec.bodies) {
-        CORO_CHECK(body_spec.surface.empty(), InputError,
-                   body_spec.location << ": body '" << body_spec.name << "': surface = \"" << body_spec.surface.string()
-                                      << "\": embedded contact surfaces are not available in this version; remove the key "
-                                         "(the body's own boundary is its contact surface)");
         const TetMesh mesh = load_body_mesh(body_spec, loaded.warnings);
         Body body(mesh, body_spec, default_num_parts(mesh.num_tets(), spec.solver.parts_per_thread));
+        if (!body_spec.surface.empty()) {
+            SurfaceMesh surface;
+            try {
+                surface = read_surface(body_spec.surface);
+            } catch (const InputError& error) {
+                throw InputError(body_spec.location + ": body '" + body_spec.name + "': surface " +
+                                 body_spec.surface.string() + ": " + error.what());
+            }
+            body_spec.transform.apply(surface.vertices);
+            body.embed_surface(std::move(surface));
+        }
         const std::vector<Index> unused = unreferenced_vertices(body.mesh());
         for (const Index v : unused)
             body.fix_vertex(v);

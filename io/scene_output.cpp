@@ -1,5 +1,6 @@
 #include <corocontact/io/scene_output.hpp>
 
+#include <corocontact/core/embedding.hpp>
 #include <corocontact/core/error.hpp>
 #include <corocontact/sim/scene_contact.hpp>
 
@@ -55,6 +56,22 @@ std::vector<FrameBlock> scene_frame(const Scene& scene)
         block.cell_data.push_back({"von_mises", std::move(von_mises)});
         block.cell_data.push_back({"partition", std::move(partition)});
         blocks.push_back(std::move(block));
+        if (body.embedding().num_points() > 0) {
+            // The embedded contact surface, where it is now, with its contact state.
+            FrameBlock surface;
+            surface.name = body.name() + "_surface";
+            surface.points = embedded_positions(body.embedding(), as_positions(body.positions()));
+            surface.tris = body.embedded_surface().faces;
+            Eigen::MatrixXd s_inside = Eigen::MatrixXd::Zero(surface.points.rows(), 1), s_depth = s_inside;
+            for (const ContactPoint& point : scene.contacts)
+                if (point.body == static_cast<Index>(b)) {
+                    s_inside(point.vertex, 0) = 1.0;
+                    s_depth(point.vertex, 0) = std::max(s_depth(point.vertex, 0), point.depth);
+                }
+            surface.point_data.push_back({"contact_inside", std::move(s_inside)});
+            surface.point_data.push_back({"contact_depth", std::move(s_depth)});
+            blocks.push_back(std::move(surface));
+        }
     }
     for (std::size_t k = 0; k < scene.obstacle_meshes.size(); ++k) {
         FrameBlock block;

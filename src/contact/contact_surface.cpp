@@ -33,8 +33,42 @@ ContactSurface ContactSurface::from_body(std::string name, CRef<Positions> body_
     return surface;
 }
 
+ContactSurface ContactSurface::from_embedding(std::string name, CRef<Positions> body_positions, const Tris& faces,
+                                             std::vector<std::array<Index, 4>> nodes,
+                                             std::vector<Eigen::Vector4d> weights)
+{
+    ContactSurface surface;
+    surface.name = std::move(name);
+    surface.faces = faces;
+    surface.embed_nodes = std::move(nodes);
+    surface.embed_weights = std::move(weights);
+    surface.source_id.resize(surface.embed_nodes.size());
+    for (std::size_t i = 0; i < surface.source_id.size(); ++i)
+        surface.source_id[i] = static_cast<Index>(i);
+    surface.vertices.resize(static_cast<Index>(surface.embed_nodes.size()), 3);
+    surface.update_vertices(body_positions);
+    surface.closed = faces.rows() > 0 && check_surface(surface.faces).closed_and_oriented();
+    surface.tree.build(surface.vertices, surface.faces);
+    return surface;
+}
+
+void ContactSurface::update_vertices(CRef<Positions> body_positions)
+{
+    for (std::size_t i = 0; i < embed_nodes.size(); ++i) {
+        Vec3 p = Vec3::Zero();
+        for (std::size_t a = 0; a < 4; ++a)
+            p += embed_weights[i][static_cast<Eigen::Index>(a)] * body_positions.row(embed_nodes[i][a]).transpose();
+        vertices.row(static_cast<Index>(i)) = p.transpose();
+    }
+}
+
 void ContactSurface::update(CRef<Positions> body_positions)
 {
+    if (!embed_nodes.empty()) {
+        update_vertices(body_positions);
+        tree.refit(vertices);
+        return;
+    }
     for (std::size_t i = 0; i < body_node.size(); ++i) {
         CORO_ASSERT(body_node[i] < body_positions.rows());
         vertices.row(static_cast<Index>(i)) = body_positions.row(body_node[i]);

@@ -70,6 +70,12 @@ Body::Body(Partitioned&& partitioned, const BodySpec& spec)
     m_system = m_fem.make_matrix();
 }
 
+void Body::embed_surface(SurfaceMesh surface)
+{
+    m_embedding = embed_points(m_mesh, surface.vertices);
+    m_embedded_surface = std::move(surface);
+}
+
 void Body::project_fixed(Eigen::Ref<VecX> dofs) const
 {
     for (std::size_t v = 0; v < m_fixed.size(); ++v)

@@ -24,21 +24,29 @@ ContactResponse contact_response(const std::vector<Body>& bodies, const std::vec
         response.forces.push_back(VecX::Zero(3 * body.num_vertices()));
 
     const double k = settings.stiffness;
-    std::array<Share, 4> shares{};
+    std::array<Share, 16> shares{};
     for (const ContactPoint& contact : contacts) {
         // Who carries the two points of this contact.
         // Obstacles (surfaces after the bodies, or planes) carry no nodes.
         int count = 0;
-        if (contact.body < n_bodies) {
-            const ContactSurface& own = surfaces[static_cast<std::size_t>(contact.body)];
-            shares[static_cast<std::size_t>(count++)] = {contact.body, own.body_node[static_cast<std::size_t>(contact.vertex)], -1.0};
-        }
+        // A surface vertex is a body node, or (embedded surface) a weighted set of 4 nodes.
+        const auto add_vertex = [&](Index body, Index vertex, double coefficient) {
+            const ContactSurface& surface = surfaces[static_cast<std::size_t>(body)];
+            const auto v = static_cast<std::size_t>(vertex);
+            if (surface.embed_nodes.empty()) {
+                shares[static_cast<std::size_t>(count++)] = {body, surface.body_node[v], coefficient};
+                return;
+            }
+            for (std::size_t a = 0; a < 4; ++a)
+                shares[static_cast<std::size_t>(count++)] = {
+                    body, surface.embed_nodes[v][a], coefficient * surface.embed_weights[v][static_cast<Eigen::Index>(a)]};
+        };
+        if (contact.body < n_bodies)
+            add_vertex(contact.body, contact.vertex, -1.0);
         if (contact.other >= 0 && contact.other < n_bodies && contact.face >= 0) {
             const ContactSurface& other = surfaces[static_cast<std::size_t>(contact.other)];
             for (int i = 0; i < 3; ++i)
-                shares[static_cast<std::size_t>(count++)] = {
-                    contact.other, other.body_node[static_cast<std::size_t>(other.faces(contact.face, i))],
-                    contact.barycentric[i]};
+                add_vertex(contact.other, other.faces(contact.face, i), contact.barycentric[i]);
         }
         if (count == 0)
             continue; // two obstacles

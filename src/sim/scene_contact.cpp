@@ -13,6 +13,9 @@ namespace coro {
 
 ContactSurface make_contact_surface(const Body& body)
 {
+    if (body.embedding().num_points() > 0)
+        return ContactSurface::from_embedding(body.name(), as_positions(body.positions()), body.embedded_surface().faces,
+                                              body.embedding().nodes, body.embedding().weights);
     ContactSurface surface =
         ContactSurface::from_body(body.name(), as_positions(body.positions()), boundary_faces(body.mesh()));
     // from_body numbers the body's (internal) nodes; the user sees input node indices.
@@ -62,8 +65,8 @@ std::vector<NodeContact> node_contacts(const std::vector<ContactSurface>& surfac
     }
     for (const ContactPoint& point : points) {
         const auto b = static_cast<std::size_t>(point.body);
-        if (b >= nodes.size())
-            continue; // a vertex of an obstacle
+        if (b >= nodes.size() || surfaces[b].body_node.empty())
+            continue; // a vertex of an obstacle, or of an embedded surface (no node of its own)
         const Index node = surfaces[b].body_node[static_cast<std::size_t>(point.vertex)];
         nodes[b].inside[static_cast<std::size_t>(node)] = 1;
         nodes[b].depth[node] = std::max(nodes[b].depth[node], point.depth);

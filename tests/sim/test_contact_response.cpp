@@ -219,6 +219,53 @@ TEST(ContactResponse, BoxRestsOnAMeshObstacleAsOnAPlane)
     EXPECT_NEAR(depth_sum / count, predicted, 0.01 * predicted);
 }
 
+TEST(ContactResponse, EmbeddedSurfaceForcesKeepTotalForceAndMoment)
+{
+    // A fine sphere surface embedded in a coarse tet sphere, pressed into a plane: the contact
+    // forces reach the tet nodes through barycentric weights; their total force and moment
+    // about the origin equal those of the forces on the surface vertices.
+    LoadedCase run = load(R"toml([contact]
+enabled = true
+stiffness = 1000.0
+[[body]]
+name = "ball"
+shape = "sphere"
+radius = 0.5
+resolution = 4
+[[obstacle]]
+type = "plane"
+point = [0.0, -0.45, 0.0]
+normal = [0.3, 1.0, 0.1]
+)toml");
+    Body& body = run.loaded.scene.bodies[0];
+    const TetMesh fine = make_sphere(Vec3::Zero(), 0.49, 10);
+    SurfaceMesh surface;
+    surface.faces = boundary_faces(fine);
+    surface.vertices = fine.rest_positions; // interior nodes are unused vertices: harmless
+    body.embed_surface(surface);
+    Scene& scene = run.loaded.scene;
+    Simulation simulation(scene, run.spec);
+    simulation.run(0, nullptr, nullptr); // detection and response on the initial state only
+    ASSERT_FALSE(scene.contacts.empty());
+
+    Vec3 force = Vec3::Zero(), moment = Vec3::Zero();
+    const Positions at_surface = embedded_positions(body.embedding(), as_positions(body.positions()));
+    for (const ContactPoint& c : scene.contacts) {
+        const Vec3 f = run.spec.contact.stiffness * c.depth * c.normal; // on the surface vertex
+        force += f;
+        moment += at_surface.row(c.vertex).transpose().cross(f);
+    }
+    Vec3 node_force = Vec3::Zero(), node_moment = Vec3::Zero();
+    const VecX& f_nodes = scene.contact_forces[0];
+    for (Index v = 0; v < body.num_vertices(); ++v) {
+        node_force += f_nodes.segment<3>(3 * v);
+        node_moment += body.positions().segment<3>(3 * v).cross(Vec3(f_nodes.segment<3>(3 * v)));
+    }
+    EXPECT_GT(force.norm(), 0.0);
+    EXPECT_NEAR_REL(node_force, force, 1e-12 * force.norm(), 0.0);
+    EXPECT_NEAR_REL(node_moment, moment, 1e-12 * force.norm(), 0.0);
+}
+
 TEST(ContactResponse, FrictionSticksBelowAndSlidesAboveTheFrictionAngle)
 {
     // μ = 0.5: tan 20° = 0.36 < μ sticks, tan 35° = 0.70 > μ slides.

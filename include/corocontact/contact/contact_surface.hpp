@@ -5,6 +5,7 @@
 #include <corocontact/contact/aabb_tree.hpp>
 #include <corocontact/core/types.hpp>
 
+#include <array>
 #include <string>
 #include <vector>
 
@@ -18,6 +19,10 @@ struct ContactSurface {
     std::vector<Index> body_node; ///< #S: the vertex's row in the body positions given to from_body/update
     std::vector<Index> source_id; ///< #S: the vertex's node index in the body's mesh file (for reports;
                                   ///< from_body sets it to body_node, callers map it to the file order)
+    /// Embedded surfaces (coupled meshes): vertex i sits at Σ_k embed_weights[i][k] ·
+    /// (body row embed_nodes[i][k]) instead of a body row of its own; empty otherwise.
+    std::vector<std::array<Index, 4>> embed_nodes;
+    std::vector<Eigen::Vector4d> embed_weights;
     bool closed = true;           ///< closed and consistently oriented (else: winding number only)
     AabbTree tree;                ///< over faces; build() once, refit() after vertices move
 
@@ -25,8 +30,17 @@ struct ContactSurface {
     /// are compacted to the vertices they use (ascending node index) and the tree is built.
     static ContactSurface from_body(std::string name, CRef<Positions> body_positions, const Tris& faces);
 
-    /// Copies the body's current node positions into `vertices` and refits the tree.
+    /// A surface whose vertices follow body nodes through barycentric weights (see
+    /// core/embedding.hpp); source_id is the surface file's vertex index.
+    static ContactSurface from_embedding(std::string name, CRef<Positions> body_positions, const Tris& faces,
+                                         std::vector<std::array<Index, 4>> nodes, std::vector<Eigen::Vector4d> weights);
+
+    /// Copies the body's current node positions into `vertices` (through the weights for an
+    /// embedded surface) and refits the tree.
     void update(CRef<Positions> body_positions);
+
+private:
+    void update_vertices(CRef<Positions> body_positions); // embedded surfaces
 };
 
 } // namespace coro

@@ -2,6 +2,8 @@
 /// @file body.hpp
 /// @brief One deformable body: its mesh, FEM model, state, constraints and loads.
 
+#include <corocontact/core/embedding.hpp>
+#include <corocontact/core/surface_mesh.hpp>
 #include <corocontact/core/tet_mesh.hpp>
 #include <corocontact/fem/corotational_fem.hpp>
 #include <corocontact/sim/case_spec.hpp>
@@ -66,6 +68,13 @@ public:
     /// The body's PCG solver (keeps its work vectors between steps).
     PcgSolver& pcg() { return m_pcg; }
 
+    /// Embeds a fine contact surface (positions after the body transform) in the tets: each
+    /// vertex follows the tet containing it (paper §4, coupled meshes).
+    void embed_surface(SurfaceMesh surface);
+    /// The embedded surface at rest (empty when the body has none) and its binding.
+    const SurfaceMesh& embedded_surface() const { return m_embedded_surface; }
+    const Embedding& embedding() const { return m_embedding; }
+
     /// Zeroes the entries of fixed nodes in a #3V vector (projection).
     void project_fixed(Eigen::Ref<VecX> dofs) const;
 
@@ -90,6 +99,8 @@ private:
     double m_rayleigh_stiffness = 0.0;
     BsrMatrix m_system;
     PcgSolver m_pcg;
+    SurfaceMesh m_embedded_surface;
+    Embedding m_embedding;
 };
 
 } // namespace coro
