@@ -195,6 +195,8 @@ void CorotationalFem::part_pass(Index part, const Pass& pass)
             CORO_CHECK(f.allFinite(), NumericalError, "tet " << t << ": the deformation gradient is not finite");
             m_rotations[at(t)] = polar_rotation(f, m_rotations[at(t)]);
         }
+        if (!pass.forces && !values)
+            continue; // rotations only: no rotated gradients needed
         const Mat34 rg = m_rotations[at(t)] * g; // rotated gradients G_i
         const double volume = m_volumes[at(t)];
 

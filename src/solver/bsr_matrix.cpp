@@ -2,16 +2,37 @@
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
 
 #include <algorithm>
+#include <functional>
 #include <stdexcept>
 #include <string>
 
 namespace coro {
 
 namespace {
-constexpr Index SPMV_GRAIN = 256; // block rows per task
+constexpr Index SPMV_GRAIN = 256; // block rows per task (and per reduction leaf of multiply_dot)
+
+// y_r = Σ_k A_rk x_k for block rows [begin, end), each row summed in pattern order.
+inline void multiply_rows(const double* values, const Index* columns, const Index* offsets, const double* xd,
+                          double* yd, Index begin, Index end)
+{
+    for (Index r = begin; r != end; ++r) {
+        double y0 = 0.0, y1 = 0.0, y2 = 0.0;
+        for (Index k = offsets[r]; k < offsets[r + 1]; ++k) {
+            const double* a = values + 9 * static_cast<std::ptrdiff_t>(k);
+            const double* xc = xd + 3 * static_cast<std::ptrdiff_t>(columns[k]);
+            y0 += a[0] * xc[0] + a[1] * xc[1] + a[2] * xc[2];
+            y1 += a[3] * xc[0] + a[4] * xc[1] + a[5] * xc[2];
+            y2 += a[6] * xc[0] + a[7] * xc[1] + a[8] * xc[2];
+        }
+        yd[3 * r] = y0;
+        yd[3 * r + 1] = y1;
+        yd[3 * r + 2] = y2;
+    }
 }
+} // namespace
 
 BsrMatrix::BsrMatrix(std::vector<Index> row_offsets, std::vector<Index> columns)
     : m_row_offsets(std::move(row_offsets)), m_columns(std::move(columns))
@@ -53,20 +74,28 @@ void BsrMatrix::multiply(CRef<VecX> x, Eigen::Ref<VecX> y) const
     double* yd = y.data();
     tbb::parallel_for(tbb::blocked_range<Index>(0, num_block_rows(), SPMV_GRAIN),
                       [&](const tbb::blocked_range<Index>& range) {
-                          for (Index r = range.begin(); r != range.end(); ++r) {
-                              double y0 = 0.0, y1 = 0.0, y2 = 0.0;
-                              for (Index k = offsets[r]; k < offsets[r + 1]; ++k) {
-                                  const double* a = values + 9 * static_cast<std::ptrdiff_t>(k);
-                                  const double* xc = xd + 3 * static_cast<std::ptrdiff_t>(columns[k]);
-                                  y0 += a[0] * xc[0] + a[1] * xc[1] + a[2] * xc[2];
-                                  y1 += a[3] * xc[0] + a[4] * xc[1] + a[5] * xc[2];
-                                  y2 += a[6] * xc[0] + a[7] * xc[1] + a[8] * xc[2];
-                              }
-                              yd[3 * r] = y0;
-                              yd[3 * r + 1] = y1;
-                              yd[3 * r + 2] = y2;
-                          }
+                          multiply_rows(values, columns, offsets, xd, yd, range.begin(), range.end());
                       });
+}
+
+double BsrMatrix::multiply_dot(CRef<VecX> x, Eigen::Ref<VecX> y) const
+{
+    const double* values = m_values.data();
+    const Index* columns = m_columns.data();
+    const Index* offsets = m_row_offsets.data();
+    const double* xd = x.data();
+    double* yd = y.data();
+    return tbb::parallel_deterministic_reduce(
+        tbb::blocked_range<Index>(0, num_block_rows(), SPMV_GRAIN), 0.0,
+        [&](const tbb::blocked_range<Index>& range, double acc) {
+            multiply_rows(values, columns, offsets, xd, yd, range.begin(), range.end());
+            double sum = 0.0;
+            for (std::ptrdiff_t i = 3 * static_cast<std::ptrdiff_t>(range.begin());
+                 i < 3 * static_cast<std::ptrdiff_t>(range.end()); ++i)
+                sum += xd[i] * yd[i];
+            return acc + sum;
+        },
+        std::plus<double>());
 }
 
 SparseMat BsrMatrix::to_sparse() const

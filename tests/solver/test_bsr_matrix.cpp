@@ -3,6 +3,7 @@
 #include <corocontact/solver/bsr_matrix.hpp>
 
 #include <gtest/gtest.h>
+#include <tbb/task_arena.h>
 
 #include <random>
 #include <stdexcept>
@@ -55,4 +56,19 @@ TEST(BsrMatrix, RejectsMalformedPatterns)
     EXPECT_THROW(BsrMatrix({0, 1, 2}, {1, 0}), std::invalid_argument);   // no diagonals
     EXPECT_THROW(BsrMatrix({0, 2, 3}, {1, 0, 1}), std::invalid_argument); // unsorted row
     EXPECT_THROW(BsrMatrix({0, 2}, {0}), std::invalid_argument);         // offsets vs columns
+}
+
+TEST(BsrMatrix, MultiplyDotEqualsMultiplyThenDotForAnyThreadCount)
+{
+    const BsrMatrix a = random_matrix(700, 5); // several reduction leaves
+    const VecX x = VecX::LinSpaced(a.num_dofs(), -1.0, 2.0);
+    VecX y_plain(a.num_dofs()), y_one(a.num_dofs()), y_two(a.num_dofs());
+    a.multiply(x, y_plain);
+    double one = 0.0, two = 0.0;
+    tbb::task_arena(1).execute([&] { one = a.multiply_dot(x, y_one); });
+    tbb::task_arena(2).execute([&] { two = a.multiply_dot(x, y_two); });
+    EXPECT_TRUE(y_one == y_plain);
+    EXPECT_TRUE(y_two == y_plain);
+    EXPECT_EQ(one, two);
+    EXPECT_NEAR(one, x.dot(y_plain), 1e-12 * x.cwiseAbs().dot(y_plain.cwiseAbs()));
 }

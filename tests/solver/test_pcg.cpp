@@ -6,6 +6,7 @@
 
 #include <Eigen/SparseCholesky>
 #include <gtest/gtest.h>
+#include <tbb/task_arena.h>
 
 using namespace coro;
 
@@ -83,4 +84,63 @@ TEST(PcgSolver, ZeroRightHandSideGivesZero)
     const PcgResult result = PcgSolver().solve(a, VecX::Zero(a.num_dofs()), x, PcgSettings{});
     EXPECT_TRUE(result.converged);
     EXPECT_EQ(x.norm(), 0.0);
+}
+
+namespace {
+// Textbook PCG (Saad, Algorithm 9.1) with Eigen, serial: the reference for the fused passes.
+VecX textbook_pcg(const SparseMat& a, const VecX& b, VecX x, const VecX& inverse_diagonal, Index iterations)
+{
+    VecX r = b - a * x;
+    VecX z = inverse_diagonal.cwiseProduct(r);
+    VecX p = z;
+    double rz = r.dot(z);
+    for (Index k = 0; k < iterations; ++k) {
+        const VecX q = a * p;
+        const double alpha = rz / p.dot(q);
+        x += alpha * p;
+        r -= alpha * q;
+        z = inverse_diagonal.cwiseProduct(r);
+        const double rz_next = r.dot(z);
+        p = z + (rz_next / rz) * p;
+        rz = rz_next;
+    }
+    return x;
+}
+} // namespace
+
+TEST(PcgSolver, FusedIterationsMatchTextbookPcg)
+{
+    const BsrMatrix a = fem_system(6);
+    const SparseMat sparse = a.to_sparse();
+    const VecX b = VecX::LinSpaced(a.num_dofs(), -1.0, 2.0);
+    const VecX x0 = VecX::Constant(a.num_dofs(), 0.1);
+    PcgSettings settings;
+    settings.max_iterations = 7;
+    settings.tolerance = 1e-14;
+    settings.preconditioner = PcgPreconditioner::JACOBI;
+    VecX x = x0;
+    const PcgResult result = PcgSolver().solve(a, b, x, settings);
+    ASSERT_EQ(result.iterations, 7);
+    const VecX expected = textbook_pcg(sparse, b, x0, sparse.diagonal().cwiseInverse(), 7);
+    EXPECT_NEAR_REL(x, expected, 1e-10 * expected.cwiseAbs().maxCoeff(), 0.0);
+    EXPECT_NEAR((b - sparse * x).norm() / b.norm(), result.residual, 1e-12);
+}
+
+TEST(PcgSolver, BitwiseIdenticalForOneAndTwoThreads)
+{
+    const BsrMatrix a = fem_system(12); // 2197 nodes: several leaves in every reduction
+    const VecX b = VecX::LinSpaced(a.num_dofs(), -1.0, 2.0);
+    for (const PcgPreconditioner kind : {PcgPreconditioner::JACOBI, PcgPreconditioner::BLOCK_JACOBI}) {
+        PcgSettings settings;
+        settings.max_iterations = 10;
+        settings.tolerance = 1e-14;
+        settings.preconditioner = kind;
+        VecX one = VecX::Zero(a.num_dofs()), two = one;
+        PcgResult r1, r2;
+        tbb::task_arena(1).execute([&] { r1 = PcgSolver().solve(a, b, one, settings); });
+        tbb::task_arena(2).execute([&] { r2 = PcgSolver().solve(a, b, two, settings); });
+        EXPECT_TRUE(one == two);
+        EXPECT_EQ(r1.residual, r2.residual);
+        EXPECT_EQ(r1.iterations, r2.iterations);
+    }
 }

@@ -49,6 +49,14 @@ public:
     /// @param[out] y  #3N DOFs (must not alias x)
     void multiply(CRef<VecX> x, Eigen::Ref<VecX> y) const;
 
+    /// y = A x and, in the same pass, x·y (PCG's pᵀAp) with a fixed reduction tree
+    /// (tbb::parallel_deterministic_reduce over fixed row chunks): bitwise the same for any
+    /// thread count, and y bitwise equal to multiply().
+    /// @param[in] x   #3N DOFs
+    /// @param[out] y  #3N DOFs (must not alias x)
+    /// @return x·y (not checked for finiteness)
+    double multiply_dot(CRef<VecX> x, Eigen::Ref<VecX> y) const;
+
     /// The same matrix as an Eigen sparse matrix (tests, reference paths).
     SparseMat to_sparse() const;
 

@@ -28,6 +28,9 @@ struct PcgResult {
 };
 
 /// A reusable PCG solver: keeps its work vectors and the preconditioner between solves.
+/// Each iteration makes three parallel passes: q = A p fused with pᵀq; x, r and z = M⁻¹r
+/// updated together with r·r and r·z; p = z + βp. Every reduction has a fixed tree, so the
+/// iterates are bitwise the same for any thread count.
 class PcgSolver {
 public:
     /// Solves A x = b for symmetric positive definite A, warm-started from the given x.
@@ -38,10 +41,18 @@ public:
     PcgResult solve(const BsrMatrix& a, CRef<VecX> b, Eigen::Ref<VecX> x, const PcgSettings& settings);
 
 private:
+    struct Sums {
+        double rr = 0.0; ///< r·r
+        double rz = 0.0; ///< r·z
+    };
     void build_preconditioner(const BsrMatrix& a, PcgPreconditioner kind);
-    void apply_preconditioner(CRef<VecX> r, Eigen::Ref<VecX> z) const;
+    /// One fused pass over the nodes: either r = b − r (r holding A x) when `b` is given, or
+    /// x += αp, r −= αq; then z = M⁻¹ r, and r·r, r·z with a fixed reduction tree.
+    Sums residual_pass(const double* b, double alpha, double* x);
 
-    std::vector<Block3> m_inverse_blocks; // one per node, diagonal-only for JACOBI
+    PcgPreconditioner m_kind = PcgPreconditioner::JACOBI;
+    std::vector<Block3> m_inverse_blocks; // BLOCK_JACOBI: one per node
+    VecX m_inverse_diagonal;              // JACOBI: one per DOF
     VecX m_r, m_z, m_p, m_q;
 };
 
