@@ -1,5 +1,7 @@
 #include <corocontact/io/mesh_readers.hpp>
 
+#include "detail/text_input.hpp"
+
 #include <corocontact/core/error.hpp>
 
 #include <algorithm>
@@ -24,89 +26,18 @@
 namespace coro {
 namespace {
 
+using detail::in_quotes;
+using detail::is_blank;
+using detail::LineCursor;
+using detail::read_file;
+using detail::trimmed;
+
 /// Upper bound on what a header count may pre-allocate: counts are input, so a corrupt
 /// header must not be able to request gigabytes; beyond this, containers grow as they read.
 constexpr std::size_t RESERVE_CAP = std::size_t{1} << 16;
 
 /// Gmsh element type of the 4-node tetrahedron; every other type is skipped.
 constexpr int MSH_TET4 = 4;
-
-/// A token or line as it appears in a message: quoted, cut after a few dozen characters.
-std::string in_quotes(std::string_view text)
-{
-    constexpr std::size_t MAX_SHOWN = 40;
-    if (text.size() <= MAX_SHOWN)
-        return "'" + std::string(text) + "'";
-    return "'" + std::string(text.substr(0, MAX_SHOWN)) + "...'";
-}
-
-bool is_blank(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\v' || c == '\f'; }
-
-std::string_view trimmed(std::string_view s)
-{
-    while (!s.empty() && is_blank(s.front()))
-        s.remove_prefix(1);
-    while (!s.empty() && is_blank(s.back()))
-        s.remove_suffix(1);
-    return s;
-}
-
-/// Reads the whole file; the checks name the file and say what is wrong with it.
-std::string read_file(const std::filesystem::path& path)
-{
-    std::error_code ec;
-    const auto status = std::filesystem::status(path, ec);
-    CORO_CHECK(!ec || ec == std::errc::no_such_file_or_directory, InputError,
-               path.string() << ": cannot access the mesh file: " << ec.message());
-    CORO_CHECK(std::filesystem::exists(status), InputError,
-               path.string() << ": mesh file does not exist");
-    CORO_CHECK(!std::filesystem::is_directory(status), InputError,
-               path.string() << ": is a directory, expected a mesh file");
-    const std::unique_ptr<std::FILE, int (*)(std::FILE*)> file(std::fopen(path.c_str(), "rb"),
-                                                               &std::fclose);
-    CORO_CHECK(file != nullptr, InputError,
-               path.string() << ": cannot open the mesh file: " << std::strerror(errno));
-    std::string text;
-    std::array<char, 1 << 16> buffer{};
-    std::size_t n = 0;
-    while ((n = std::fread(buffer.data(), 1, buffer.size(), file.get())) > 0)
-        text.append(buffer.data(), n);
-    CORO_CHECK(!std::ferror(file.get()), InputError,
-               path.string() << ": read error in the mesh file: " << std::strerror(errno));
-    return text;
-}
-
-/// The non-blank lines of a text, trimmed, with their 1-based line numbers.
-class LineCursor {
-public:
-    LineCursor(std::string path, std::string_view text) : m_path(std::move(path)), m_text(text) {}
-
-    /// Advances to the next non-blank line; false at the end of the text.
-    bool next(std::string_view& line)
-    {
-        while (m_pos < m_text.size()) {
-            const std::size_t end = std::min(m_text.find('\n', m_pos), m_text.size());
-            line = trimmed(m_text.substr(m_pos, end - m_pos));
-            m_pos = end + 1;
-            ++m_line;
-            if (!line.empty())
-                return true;
-        }
-        return false;
-    }
-
-    /// "path:line" of the line last returned (at the end of the text: of the last line).
-    std::string where() const { return m_path + ":" + std::to_string(std::max(m_line, 1L)); }
-
-    /// Number of the line last returned.
-    long line() const { return m_line; }
-
-private:
-    std::string m_path;
-    std::string_view m_text;
-    std::size_t m_pos = 0;
-    long m_line = 0;
-};
 
 /// Returns the next line, which must hold data (not a `$Section` line, not the end of file).
 /// `what` streams a description of the expected data into the message; it is only called
@@ -555,7 +486,7 @@ void skip_section(LineCursor& cursor, std::string_view name)
 
 TetMesh read_msh(const std::filesystem::path& path)
 {
-    const std::string text = read_file(path);
+    const std::string text = read_file(path, "mesh file");
     LineCursor cursor(path.string(), text);
 
     std::string_view line;

@@ -1,5 +1,7 @@
 #include <corocontact/io/surface_readers.hpp>
 
+#include "detail/text_input.hpp"
+
 #include <corocontact/core/error.hpp>
 
 #include <algorithm>
@@ -25,6 +27,17 @@
 namespace coro {
 namespace {
 
+using detail::in_quotes;
+using detail::is_blank;
+using detail::read_file;
+using detail::trimmed;
+
+/// Lines with `#` comments removed (OBJ, OFF).
+class LineCursor : public detail::LineCursor {
+public:
+    LineCursor(std::string path, std::string_view text) : detail::LineCursor(std::move(path), text, true) {}
+};
+
 /// Upper bound on what a count read from a file may pre-allocate: beyond this, containers
 /// grow as items are actually read, so a corrupt header cannot request gigabytes.
 constexpr std::size_t RESERVE_CAP = std::size_t{1} << 16;
@@ -42,33 +55,7 @@ constexpr std::size_t STL_RECORD_BYTES = 50;
 /// Polygons up to this many corners are checked for repeated vertices pairwise.
 constexpr std::size_t PAIRWISE_CHECK_MAX = 16;
 
-/// A token or line as it appears in a message: quoted, cut after a few dozen characters,
-/// control bytes shown as '?', so binary garbage does not end up in a terminal.
-std::string in_quotes(std::string_view text)
-{
-    constexpr std::size_t MAX_SHOWN = 40;
-    std::string shown = "'";
-    for (std::size_t i = 0; i < std::min(text.size(), MAX_SHOWN); ++i) {
-        const auto c = static_cast<unsigned char>(text[i]);
-        shown += (c < 0x20 || c == 0x7f) ? '?' : text[i];
-    }
-    if (text.size() > MAX_SHOWN)
-        shown += "...";
-    return shown + "'";
-}
-
-bool is_blank(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\v' || c == '\f'; }
-
 bool is_space(char c) { return is_blank(c) || c == '\n'; }
-
-std::string_view trimmed(std::string_view s)
-{
-    while (!s.empty() && is_blank(s.front()))
-        s.remove_prefix(1);
-    while (!s.empty() && is_blank(s.back()))
-        s.remove_suffix(1);
-    return s;
-}
 
 char lower(char c) { return static_cast<char>(std::tolower(static_cast<unsigned char>(c))); }
 
@@ -81,31 +68,6 @@ bool is_keyword(std::string_view token, std::string_view keyword)
         if (lower(token[i]) != keyword[i])
             return false;
     return true;
-}
-
-/// Reads the whole file; the checks name the file and say what is wrong with it.
-std::string read_file(const std::filesystem::path& path)
-{
-    std::error_code ec;
-    const auto status = std::filesystem::status(path, ec);
-    CORO_CHECK(!ec || ec == std::errc::no_such_file_or_directory, InputError,
-               path.string() << ": cannot access the surface file: " << ec.message());
-    CORO_CHECK(std::filesystem::exists(status), InputError,
-               path.string() << ": surface file does not exist");
-    CORO_CHECK(!std::filesystem::is_directory(status), InputError,
-               path.string() << ": is a directory, expected a surface file");
-    const std::unique_ptr<std::FILE, int (*)(std::FILE*)> file(std::fopen(path.c_str(), "rb"),
-                                                               &std::fclose);
-    CORO_CHECK(file != nullptr, InputError,
-               path.string() << ": cannot open the surface file: " << std::strerror(errno));
-    std::string text;
-    std::array<char, 1 << 16> buffer{};
-    std::size_t n = 0;
-    while ((n = std::fread(buffer.data(), 1, buffer.size(), file.get())) > 0)
-        text.append(buffer.data(), n);
-    CORO_CHECK(!std::ferror(file.get()), InputError,
-               path.string() << ": read error in the surface file: " << std::strerror(errno));
-    return text;
 }
 
 /// Writes `bytes` to `path`, replacing the file.
@@ -121,44 +83,6 @@ void write_file(const std::filesystem::path& path, const std::string& bytes)
     CORO_CHECK(std::fclose(file.release()) == 0, InputError,
                path.string() << ": write failed on close: " << std::strerror(errno));
 }
-
-/// The non-blank lines of a text, `#` comments removed, trimmed, with 1-based line numbers.
-class LineCursor {
-public:
-    LineCursor(std::string path, std::string_view text) : m_path(std::move(path)), m_text(text)
-    {
-        if (m_text.substr(0, 3) == "\xEF\xBB\xBF") // UTF-8 byte order mark
-            m_text.remove_prefix(3);
-    }
-
-    /// Advances to the next line with data; false at the end of the text.
-    bool next(std::string_view& line)
-    {
-        while (m_pos < m_text.size()) {
-            const std::size_t end = std::min(m_text.find('\n', m_pos), m_text.size());
-            line = m_text.substr(m_pos, end - m_pos);
-            m_pos = end + 1;
-            ++m_line;
-            line = trimmed(line.substr(0, line.find('#')));
-            if (!line.empty())
-                return true;
-        }
-        return false;
-    }
-
-    /// "path:line" of the line last returned (at the end of the text: of the last line).
-    std::string where() const { return m_path + ":" + std::to_string(std::max(m_line, 1L)); }
-
-    long line() const { return m_line; }
-
-    const std::string& path() const { return m_path; }
-
-private:
-    std::string m_path;
-    std::string_view m_text;
-    std::size_t m_pos = 0;
-    long m_line = 0;
-};
 
 /// Parses a whole token as a double; false if it is not a number. Accepts a leading '+'.
 bool parse_double(std::string_view token, double& value)
@@ -1081,7 +1005,7 @@ SurfaceMesh read_surface(const std::filesystem::path& path)
                path.string() << ": unsupported surface extension "
                              << (extension.empty() ? std::string("(none)") : in_quotes(extension))
                              << ", expected one of: .obj, .stl, .off");
-    const std::string bytes = read_file(path);
+    const std::string bytes = read_file(path, "surface file");
     if (extension == ".obj")
         return read_obj(path, bytes);
     if (extension == ".off")

@@ -1,6 +1,7 @@
 #include <corocontact/sim/contact_step.hpp>
 
 #include <corocontact/core/error.hpp>
+#include <corocontact/sim/integrator.hpp>
 
 #include <algorithm>
 #include <numeric>
@@ -20,29 +21,6 @@ Index find_root(std::vector<Index>& parent, Index i)
 }
 
 bool is_fixed(const Body& body, Index node) { return body.fixed()[at(node)] != 0; }
-
-// Rotations, the body's own matrix and its right-hand side M v + h (f_ext + f0 − K'x + f_contact).
-VecX prepare_body(Body& body, const VecX& contact_forces, double dt, const Vec3& gravity, PhaseTimes& times)
-{
-    CorotationalFem& fem = body.fem();
-    const VecX& masses = fem.lumped_masses();
-    {
-        ScopedTimer timer(times.rotation);
-        fem.update_rotations(body.positions());
-    }
-    ScopedTimer timer(times.assembly);
-    VecX rhs(body.positions().size());
-    fem.assemble_with_forces(body.positions(), dt * dt + dt * body.rayleigh_stiffness(), 1.0 + dt * body.rayleigh_mass(),
-                             body.fixed(), body.system_matrix(), rhs);
-    rhs += body.load_forces() + contact_forces;
-    for (Eigen::Index i = 0; i < masses.size(); ++i)
-        rhs.segment<3>(3 * i) += masses[i] * gravity;
-    rhs *= dt;
-    for (Eigen::Index i = 0; i < masses.size(); ++i)
-        rhs.segment<3>(3 * i) += masses[i] * body.velocities().segment<3>(3 * i);
-    body.project_fixed(rhs);
-    return rhs;
-}
 
 // One system for several bodies: their matrices side by side plus the coupling blocks.
 BsrMatrix merged_matrix(const std::vector<Body>& bodies, const std::vector<Index>& group,
@@ -105,7 +83,7 @@ std::vector<PcgResult> implicit_euler_step_with_contact(std::vector<Body>& bodie
     const auto n_bodies = static_cast<Index>(bodies.size());
     std::vector<VecX> rhs(bodies.size());
     for (Index b = 0; b < n_bodies; ++b)
-        rhs[at(b)] = prepare_body(bodies[at(b)], response.forces[at(b)], dt, gravity, times);
+        rhs[at(b)] = assemble_implicit_euler(bodies[at(b)], dt, gravity, response.forces[at(b)], times);
 
     // Contact terms that touch fixed nodes are dropped: those rows and columns are identity.
     std::vector<const ContactResponse::Block*> active;

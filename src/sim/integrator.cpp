@@ -24,31 +24,38 @@ void check_finite(const Body& body, const VecX& values, const char* what)
 }
 } // namespace
 
-PcgResult implicit_euler_step(Body& body, double dt, const Vec3& gravity, const PcgSettings& settings,
-                              PhaseTimes& times)
+VecX assemble_implicit_euler(Body& body, double dt, const Vec3& gravity, const VecX& extra_forces, PhaseTimes& times)
 {
     CorotationalFem& fem = body.fem();
-    VecX& x = body.positions();
-    VecX& v = body.velocities();
+    const VecX& x = body.positions();
+    const VecX& v = body.velocities();
     const VecX& masses = fem.lumped_masses();
     const double alpha = body.rayleigh_mass(), beta = body.rayleigh_stiffness();
-
     {
         ScopedTimer timer(times.rotation);
         fem.update_rotations(x);
     }
+    ScopedTimer timer(times.assembly);
     VecX rhs(x.size());
-    {
-        // Rotated stiffness and internal forces in one pass over the tets.
-        ScopedTimer timer(times.assembly);
-        fem.assemble_with_forces(x, dt * dt + dt * beta, 1.0 + dt * alpha, body.fixed(), body.system_matrix(), rhs);
-        rhs += body.load_forces();
-        add_gravity(masses, gravity, rhs);
-        rhs *= dt;
-        for (Eigen::Index i = 0; i < masses.size(); ++i)
-            rhs.segment<3>(3 * i) += masses[i] * v.segment<3>(3 * i);
-        body.project_fixed(rhs);
-    }
+    // Rotated stiffness and internal forces in one pass over the tets.
+    fem.assemble_with_forces(x, dt * dt + dt * beta, 1.0 + dt * alpha, body.fixed(), body.system_matrix(), rhs);
+    rhs += body.load_forces();
+    if (extra_forces.size() > 0)
+        rhs += extra_forces;
+    add_gravity(masses, gravity, rhs);
+    rhs *= dt;
+    for (Eigen::Index i = 0; i < masses.size(); ++i)
+        rhs.segment<3>(3 * i) += masses[i] * v.segment<3>(3 * i);
+    body.project_fixed(rhs);
+    return rhs;
+}
+
+PcgResult implicit_euler_step(Body& body, double dt, const Vec3& gravity, const PcgSettings& settings,
+                              PhaseTimes& times)
+{
+    VecX& x = body.positions();
+    VecX& v = body.velocities();
+    const VecX rhs = assemble_implicit_euler(body, dt, gravity, VecX(), times);
     PcgResult result;
     {
         ScopedTimer timer(times.solve);

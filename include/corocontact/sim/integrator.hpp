@@ -12,6 +12,13 @@
 
 namespace coro {
 
+/// Prepares one body's step: rotations from the current positions, the system matrix
+/// (M + hC + h²K', fixed nodes projected) in body.system_matrix(), and the right-hand side
+/// M v + h (f_ext + m g + f0 − K'x + extra_forces) with fixed rows zeroed.
+/// @param[in] extra_forces  #3V forces added for this step (contact), or empty for none [N]
+/// @return the right-hand side, #3V
+VecX assemble_implicit_euler(Body& body, double dt, const Vec3& gravity, const VecX& extra_forces, PhaseTimes& times);
+
 /// Advances one body by one step.
 /// @param[in,out] body    positions and velocities are updated
 /// @param[in] dt          time step h [s], > 0

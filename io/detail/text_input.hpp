@@ -1,0 +1,111 @@
+#pragma once
+// Private to io/: reading a text input whole and walking its lines with their numbers, for
+// readers whose messages say "path:line: expected ..., found ...".
+
+#include <corocontact/core/error.hpp>
+
+#include <algorithm>
+#include <array>
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <memory>
+#include <string>
+#include <string_view>
+#include <system_error>
+
+namespace coro::detail {
+
+/// A token or line as it appears in a message: quoted, cut after a few dozen characters,
+/// control bytes shown as '?', so binary garbage does not end up in a terminal.
+inline std::string in_quotes(std::string_view text)
+{
+    constexpr std::size_t MAX_SHOWN = 40;
+    std::string shown = "'";
+    for (std::size_t i = 0; i < std::min(text.size(), MAX_SHOWN); ++i) {
+        const auto c = static_cast<unsigned char>(text[i]);
+        shown += (c < 0x20 || c == 0x7f) ? '?' : text[i];
+    }
+    if (text.size() > MAX_SHOWN)
+        shown += "...";
+    return shown + "'";
+}
+
+inline bool is_blank(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\v' || c == '\f'; }
+
+inline std::string_view trimmed(std::string_view s)
+{
+    while (!s.empty() && is_blank(s.front()))
+        s.remove_prefix(1);
+    while (!s.empty() && is_blank(s.back()))
+        s.remove_suffix(1);
+    return s;
+}
+
+/// Reads the whole file; the checks name the file and say what is wrong with it.
+/// @param[in] kind  what the file should be, for messages ("mesh file", "surface file")
+inline std::string read_file(const std::filesystem::path& path, const char* kind)
+{
+    std::error_code ec;
+    const auto status = std::filesystem::status(path, ec);
+    CORO_CHECK(!ec || ec == std::errc::no_such_file_or_directory, InputError,
+               path.string() << ": cannot access the " << kind << ": " << ec.message());
+    CORO_CHECK(std::filesystem::exists(status), InputError, path.string() << ": " << kind << " does not exist");
+    CORO_CHECK(!std::filesystem::is_directory(status), InputError,
+               path.string() << ": is a directory, expected a " << kind);
+    const std::unique_ptr<std::FILE, int (*)(std::FILE*)> file(std::fopen(path.c_str(), "rb"), &std::fclose);
+    CORO_CHECK(file != nullptr, InputError, path.string() << ": cannot open the " << kind << ": " << std::strerror(errno));
+    std::string text;
+    std::array<char, 1 << 16> buffer{};
+    std::size_t n = 0;
+    while ((n = std::fread(buffer.data(), 1, buffer.size(), file.get())) > 0)
+        text.append(buffer.data(), n);
+    CORO_CHECK(!std::ferror(file.get()), InputError,
+               path.string() << ": read error in the " << kind << ": " << std::strerror(errno));
+    return text;
+}
+
+/// The non-blank lines of a text, trimmed, with their 1-based line numbers; optionally with
+/// `#` comments removed. A UTF-8 byte order mark at the start is skipped.
+class LineCursor {
+public:
+    LineCursor(std::string path, std::string_view text, bool hash_comments = false)
+        : m_path(std::move(path)), m_text(text), m_hash_comments(hash_comments)
+    {
+        if (m_text.substr(0, 3) == "\xEF\xBB\xBF")
+            m_text.remove_prefix(3);
+    }
+
+    /// Advances to the next line with data; false at the end of the text.
+    bool next(std::string_view& line)
+    {
+        while (m_pos < m_text.size()) {
+            const std::size_t end = std::min(m_text.find('\n', m_pos), m_text.size());
+            line = m_text.substr(m_pos, end - m_pos);
+            m_pos = end + 1;
+            ++m_line;
+            if (m_hash_comments)
+                line = line.substr(0, line.find('#'));
+            line = trimmed(line);
+            if (!line.empty())
+                return true;
+        }
+        return false;
+    }
+
+    /// "path:line" of the line last returned (at the end of the text: of the last line).
+    std::string where() const { return m_path + ":" + std::to_string(std::max(m_line, 1L)); }
+    /// Number of the line last returned.
+    long line() const { return m_line; }
+    const std::string& path() const { return m_path; }
+
+private:
+    std::string m_path;
+    std::string_view m_text;
+    bool m_hash_comments = false;
+    std::size_t m_pos = 0;
+    long m_line = 0;
+};
+
+} // namespace coro::detail
