@@ -75,36 +75,9 @@ void expect_marker(LineCursor& cursor, std::string_view marker, std::string_view
 }
 
 /// Whitespace-separated tokens of one line, parsed with std::from_chars.
-class Tokens {
+class Tokens : public detail::LineTokens {
 public:
-    Tokens(std::string_view line, const LineCursor& cursor) : m_rest(line), m_cursor(cursor) {}
-
-    /// Number of tokens not yet consumed.
-    std::size_t remaining() const
-    {
-        std::size_t count = 0;
-        bool in_token = false;
-        for (const char c : m_rest) {
-            const bool blank = is_blank(c);
-            if (!blank && !in_token)
-                ++count;
-            in_token = !blank;
-        }
-        return count;
-    }
-
-    std::string_view next(std::string_view what)
-    {
-        skip_blanks();
-        CORO_CHECK(!m_rest.empty(), InputError,
-                   m_cursor.where() << ": expected " << what << ", found end of line");
-        std::size_t n = 0;
-        while (n < m_rest.size() && !is_blank(m_rest[n]))
-            ++n;
-        const std::string_view token = m_rest.substr(0, n);
-        m_rest.remove_prefix(n);
-        return token;
-    }
+    using LineTokens::LineTokens;
 
     /// A non-negative integer (tags, counts).
     std::uint64_t next_count(std::string_view what)
@@ -126,47 +99,29 @@ public:
         double value = 0.0;
         const auto [end, ec] = std::from_chars(token.data(), token.data() + token.size(), value);
         CORO_CHECK(ec != std::errc::result_out_of_range, InputError,
-                   m_cursor.where() << ": expected " << what << ", found " << in_quotes(shown)
+                   cursor().where() << ": expected " << what << ", found " << in_quotes(shown)
                                     << " (out of the range of double)");
         CORO_CHECK(ec == std::errc() && end == token.data() + token.size() && std::isfinite(value),
                    InputError,
-                   m_cursor.where() << ": expected " << what << " (a finite number), found "
+                   cursor().where() << ": expected " << what << " (a finite number), found "
                                     << in_quotes(shown));
         return value;
     }
 
-    /// Requires that every token was consumed.
-    void expect_end(std::string_view what)
-    {
-        skip_blanks();
-        CORO_CHECK(m_rest.empty(), InputError,
-                   m_cursor.where() << ": expected end of line after " << what << ", found "
-                                    << in_quotes(m_rest));
-    }
-
 private:
-    void skip_blanks()
-    {
-        while (!m_rest.empty() && is_blank(m_rest.front()))
-            m_rest.remove_prefix(1);
-    }
-
     template <class T>
     T parse_integer(std::string_view token, std::string_view what, std::string_view kind) const
     {
         T value{};
         const auto [end, ec] = std::from_chars(token.data(), token.data() + token.size(), value);
         CORO_CHECK(ec != std::errc::result_out_of_range, InputError,
-                   m_cursor.where() << ": expected " << what << ", found " << in_quotes(token)
+                   cursor().where() << ": expected " << what << ", found " << in_quotes(token)
                                     << " (too large)");
         CORO_CHECK(ec == std::errc() && end == token.data() + token.size(), InputError,
-                   m_cursor.where() << ": expected " << what << " (" << kind << "), found "
+                   cursor().where() << ": expected " << what << " (" << kind << "), found "
                                     << in_quotes(token));
         return value;
     }
-
-    std::string_view m_rest;
-    const LineCursor& m_cursor;
 };
 
 enum class MshVersion { V22, V41 };

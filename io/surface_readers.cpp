@@ -105,42 +105,9 @@ template <class T> std::errc parse_integer(std::string_view token, T& value)
 }
 
 /// Whitespace-separated tokens of one line.
-class Tokens {
+class Tokens : public detail::LineTokens {
 public:
-    Tokens(std::string_view line, const LineCursor& cursor) : m_rest(line), m_cursor(cursor) {}
-
-    /// Number of tokens not yet consumed.
-    std::size_t remaining() const
-    {
-        std::size_t count = 0;
-        bool in_token = false;
-        for (const char c : m_rest) {
-            const bool blank = is_blank(c);
-            if (!blank && !in_token)
-                ++count;
-            in_token = !blank;
-        }
-        return count;
-    }
-
-    bool empty()
-    {
-        skip_blanks();
-        return m_rest.empty();
-    }
-
-    std::string_view next(std::string_view what)
-    {
-        skip_blanks();
-        CORO_CHECK(!m_rest.empty(), InputError,
-                   m_cursor.where() << ": expected " << what << ", found end of line");
-        std::size_t n = 0;
-        while (n < m_rest.size() && !is_blank(m_rest[n]))
-            ++n;
-        const std::string_view token = m_rest.substr(0, n);
-        m_rest.remove_prefix(n);
-        return token;
-    }
+    using LineTokens::LineTokens;
 
     /// A finite double.
     double next_double(std::string_view what)
@@ -149,7 +116,7 @@ public:
         double value = 0.0;
         const bool ok = parse_double(token, value);
         CORO_CHECK(ok && std::isfinite(value), InputError,
-                   m_cursor.where() << ": expected " << what << " (a finite number), found "
+                   cursor().where() << ": expected " << what << " (a finite number), found "
                                     << in_quotes(token));
         return value;
     }
@@ -161,32 +128,13 @@ public:
         std::uint64_t value = 0;
         const std::errc ec = parse_integer(token, value);
         CORO_CHECK(ec != std::errc::result_out_of_range, InputError,
-                   m_cursor.where() << ": expected " << what << ", found " << in_quotes(token)
+                   cursor().where() << ": expected " << what << ", found " << in_quotes(token)
                                     << " (too large)");
         CORO_CHECK(ec == std::errc(), InputError,
-                   m_cursor.where() << ": expected " << what << " (a non-negative integer), found "
+                   cursor().where() << ": expected " << what << " (a non-negative integer), found "
                                     << in_quotes(token));
         return value;
     }
-
-    /// Requires that every token was consumed.
-    void expect_end(std::string_view what)
-    {
-        skip_blanks();
-        CORO_CHECK(m_rest.empty(), InputError,
-                   m_cursor.where() << ": expected end of line after " << what << ", found "
-                                    << in_quotes(m_rest));
-    }
-
-private:
-    void skip_blanks()
-    {
-        while (!m_rest.empty() && is_blank(m_rest.front()))
-            m_rest.remove_prefix(1);
-    }
-
-    std::string_view m_rest;
-    const LineCursor& m_cursor;
 };
 
 /// Vertices and triangles as they are read; polygons are checked and fan-triangulated.

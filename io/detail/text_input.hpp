@@ -108,4 +108,66 @@ private:
     long m_line = 0;
 };
 
+/// Whitespace-separated tokens of one line; messages name the cursor's "path:line".
+/// Readers derive from it and add their own number parsing.
+class LineTokens {
+public:
+    LineTokens(std::string_view line, const LineCursor& cursor) : m_rest(line), m_cursor(cursor) {}
+
+    /// Number of tokens not yet consumed.
+    std::size_t remaining() const
+    {
+        std::size_t count = 0;
+        bool in_token = false;
+        for (const char c : m_rest) {
+            const bool blank = is_blank(c);
+            if (!blank && !in_token)
+                ++count;
+            in_token = !blank;
+        }
+        return count;
+    }
+
+    /// True when every token was consumed.
+    bool empty()
+    {
+        skip_blanks();
+        return m_rest.empty();
+    }
+
+    /// The next token; `what` names the expected item in the message at the end of the line.
+    std::string_view next(std::string_view what)
+    {
+        skip_blanks();
+        CORO_CHECK(!m_rest.empty(), InputError, m_cursor.where() << ": expected " << what << ", found end of line");
+        std::size_t n = 0;
+        while (n < m_rest.size() && !is_blank(m_rest[n]))
+            ++n;
+        const std::string_view token = m_rest.substr(0, n);
+        m_rest.remove_prefix(n);
+        return token;
+    }
+
+    /// Requires that every token was consumed.
+    void expect_end(std::string_view what)
+    {
+        skip_blanks();
+        CORO_CHECK(m_rest.empty(), InputError,
+                   m_cursor.where() << ": expected end of line after " << what << ", found " << in_quotes(m_rest));
+    }
+
+protected:
+    const LineCursor& cursor() const { return m_cursor; }
+
+private:
+    void skip_blanks()
+    {
+        while (!m_rest.empty() && is_blank(m_rest.front()))
+            m_rest.remove_prefix(1);
+    }
+
+    std::string_view m_rest;
+    const LineCursor& m_cursor;
+};
+
 } // namespace coro::detail
