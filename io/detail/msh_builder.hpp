@@ -85,14 +85,20 @@ public:
         m_tets.reserve(m_tets.size() + 4 * n);
     }
 
-    /// Appends a tet given by node tags, mapping them to indices.
+    /// Appends a tet given by node tags, mapping them to indices; the tags must be distinct and
+    /// known.
     template <class Where>
     void add_tet(const Where& where, std::uint64_t element_tag,
                  const std::array<std::uint64_t, 4>& node_tags)
     {
         CORO_CHECK(m_tets.size() / 4 < static_cast<std::size_t>(std::numeric_limits<Index>::max()),
                    InputError, where() << ": too many tets for a 32-bit index");
-        for (const std::uint64_t tag : node_tags) {
+        for (std::size_t k = 0; k < node_tags.size(); ++k) {
+            const std::uint64_t tag = node_tags[k];
+            for (std::size_t j = 0; j < k; ++j)
+                CORO_CHECK(node_tags[j] != tag, InputError,
+                           where() << ": tet element " << element_tag << " repeats node tag " << tag
+                                   << " (expected 4 distinct nodes)");
             const auto it = m_index_of_tag.find(tag);
             CORO_CHECK(it != m_index_of_tag.end(), InputError,
                        where() << ": tet element " << element_tag << " references unknown node tag "

@@ -541,6 +541,25 @@ $EndElements
                 input_error_at(v41, 19, "tet element 5 references unknown node tag 0"));
 }
 
+TEST(ReadMsh, RejectsTetRepeatingANodeTag)
+{
+    const fs::path path = write_msh("repeated_tag.msh", V22_HEADER + R"($Nodes
+4
+1 0 0 0
+2 1 0 0
+3 0 1 0
+4 0 0 1
+$EndNodes
+$Elements
+1
+8 4 2 0 1 1 2 4 2
+$EndElements
+)");
+    EXPECT_THAT([&] { read_msh(path); },
+                input_error_at(path, 13, "tet element 8 repeats node tag 2 (expected 4 distinct "
+                                         "nodes)"));
+}
+
 TEST(ReadMsh, RejectsDuplicateNodeTag)
 {
     const fs::path v22 =
