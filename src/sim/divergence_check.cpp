@@ -33,15 +33,53 @@ struct Lowest {
 
 Lowest lower(const Lowest& a, const Lowest& b) { return b.index < a.index ? b : a; }
 
-} // namespace
+double min_rest_volume(const Body& body)
+{
+    const std::vector<double>& volumes = body.fem().volumes();
+    return volumes.empty() ? 0.0 : *std::min_element(volumes.begin(), volumes.end());
+}
 
-DivergenceFinding find_divergence(const Body& body, const DivergenceLimits& limits)
+DivergenceFinding find_in_body(const Body& body, const DivergenceLimits& limits, double min_volume)
 {
     const double* x = body.positions().data();
     DivergenceFinding finding;
 
-    // Non-finite positions (rare: the solvers check velocities), lowest input node first.
-    if (!body.positions().allFinite()) {
+    // J = det(D_s) / (6 V). Most tets have 0 < det < hi·6·V_min and pass without reading their
+    // rest volume; only the others are divided by their own.
+    const Index* tets = body.mesh().tets.data(); // #T×4 row-major
+    const double* volumes = body.fem().volumes().data();
+    const double lo = limits.min_volume_ratio, hi = limits.max_volume_ratio;
+    const double surely_small = hi * 6.0 * min_volume;
+    const Lowest tet = tbb::parallel_reduce(
+        tbb::blocked_range<Index>(0, body.mesh().num_tets(), TET_GRAIN), Lowest{},
+        [&](const tbb::blocked_range<Index>& range, Lowest found) {
+            for (Index t = range.begin(); t != range.end(); ++t) {
+                const Index* corners = tets + 4 * static_cast<std::ptrdiff_t>(t);
+                const double* p0 = x + 3 * corners[0];
+                const double* p1 = x + 3 * corners[1];
+                const double* p2 = x + 3 * corners[2];
+                const double* p3 = x + 3 * corners[3];
+                const double a0 = p1[0] - p0[0], a1 = p1[1] - p0[1], a2 = p1[2] - p0[2];
+                const double b0 = p2[0] - p0[0], b1 = p2[1] - p0[1], b2 = p2[2] - p0[2];
+                const double c0 = p3[0] - p0[0], c1 = p3[1] - p0[1], c2 = p3[2] - p0[2];
+                const double det = a0 * (b1 * c2 - b2 * c1) + a1 * (b2 * c0 - b0 * c2) + a2 * (b0 * c1 - b1 * c0);
+                if (det > 0.0 && det < surely_small)
+                    continue;
+                // det D_m = 6 V (rest tets are positively oriented).
+                const double ratio = det / (6.0 * volumes[t]);
+                if (!(ratio > lo && ratio < hi))
+                    found.offer(body.input_tet(t), ratio);
+            }
+            return found;
+        },
+        lower);
+    if (tet.index != NONE) {
+        finding.element = tet.index;
+        finding.volume_ratio = tet.value;
+    }
+    // A NaN or Inf J comes from a non-finite position (rare: the solvers check velocities):
+    // name the lowest input node instead.
+    if (!std::isfinite(finding.volume_ratio) && !body.positions().allFinite()) {
         const Lowest node = tbb::parallel_reduce(
             tbb::blocked_range<Index>(0, body.num_vertices(), NODE_GRAIN), Lowest{},
             [&](const tbb::blocked_range<Index>& range, Lowest found) {
@@ -55,60 +93,55 @@ DivergenceFinding find_divergence(const Body& body, const DivergenceLimits& limi
             },
             lower);
         finding.node = node.index;
+        finding.element = -1;
         finding.volume_ratio = node.value;
-        return finding;
-    }
-
-    const Tets& tets = body.mesh().tets;
-    const std::vector<double>& volumes = body.fem().volumes();
-    const double lo = limits.min_volume_ratio, hi = limits.max_volume_ratio;
-    const Lowest tet = tbb::parallel_reduce(
-        tbb::blocked_range<Index>(0, body.mesh().num_tets(), TET_GRAIN), Lowest{},
-        [&](const tbb::blocked_range<Index>& range, Lowest found) {
-            for (Index t = range.begin(); t != range.end(); ++t) {
-                const double* p0 = x + 3 * tets(t, 0);
-                const double* p1 = x + 3 * tets(t, 1);
-                const double* p2 = x + 3 * tets(t, 2);
-                const double* p3 = x + 3 * tets(t, 3);
-                const double a[3] = {p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2]};
-                const double b[3] = {p2[0] - p0[0], p2[1] - p0[1], p2[2] - p0[2]};
-                const double c[3] = {p3[0] - p0[0], p3[1] - p0[1], p3[2] - p0[2]};
-                const double det = a[0] * (b[1] * c[2] - b[2] * c[1]) + a[1] * (b[2] * c[0] - b[0] * c[2]) +
-                                   a[2] * (b[0] * c[1] - b[1] * c[0]);
-                // det D_m = 6 V (rest tets are positively oriented).
-                const double ratio = det / (6.0 * volumes[static_cast<std::size_t>(t)]);
-                if (!(ratio > lo && ratio < hi))
-                    found.offer(body.input_tet(t), ratio);
-            }
-            return found;
-        },
-        lower);
-    if (tet.index != NONE) {
-        finding.element = tet.index;
-        finding.volume_ratio = tet.value;
     }
     return finding;
 }
 
-void check_divergence(const std::vector<Body>& bodies, const DivergenceLimits& limits)
+} // namespace
+
+DivergenceCheck::DivergenceCheck(const std::vector<Body>& bodies, const DivergenceLimits& limits) : m_limits(limits)
 {
-    for (const Body& body : bodies) {
-        const DivergenceFinding finding = find_divergence(body, limits);
+    for (const Body& body : bodies)
+        m_min_volumes.push_back(min_rest_volume(body));
+}
+
+DivergenceFinding DivergenceCheck::find(const std::vector<Body>& bodies, std::size_t b) const
+{
+    return find_in_body(bodies[b], m_limits, m_min_volumes[b]);
+}
+
+void DivergenceCheck::check(const std::vector<Body>& bodies) const
+{
+    for (std::size_t b = 0; b < bodies.size(); ++b) {
+        const Body& body = bodies[b];
+        const DivergenceFinding finding = find(bodies, b);
         if (finding.node >= 0)
             CORO_THROW(NumericalError, "body '" << body.name() << "': position of node " << finding.node
                                                 << " (mesh file order) is " << finding.volume_ratio);
         if (finding.element < 0)
             continue;
         const double j = finding.volume_ratio;
-        if (j <= limits.min_volume_ratio)
+        if (j <= m_limits.min_volume_ratio)
             CORO_THROW(NumericalError, "body '" << body.name() << "': element " << finding.element
                                                 << " (mesh file order) inverted beyond recovery: det F = " << j
-                                                << " (limit " << limits.min_volume_ratio << ")");
+                                                << " (limit " << m_limits.min_volume_ratio << ")");
         CORO_THROW(NumericalError, "body '" << body.name() << "': element " << finding.element
                                             << " (mesh file order) "
                                             << (std::isfinite(j) ? "blown up" : "degenerate") << ": det F = " << j
-                                            << " (limit " << limits.max_volume_ratio << ")");
+                                            << " (limit " << m_limits.max_volume_ratio << ")");
     }
+}
+
+DivergenceFinding find_divergence(const Body& body, const DivergenceLimits& limits)
+{
+    return find_in_body(body, limits, min_rest_volume(body));
+}
+
+void check_divergence(const std::vector<Body>& bodies, const DivergenceLimits& limits)
+{
+    DivergenceCheck(bodies, limits).check(bodies);
 }
 
 } // namespace coro

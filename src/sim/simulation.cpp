@@ -55,7 +55,8 @@ struct Simulation::EmbreeCheck {
 struct Simulation::EmbreeCheck {};
 #endif
 
-Simulation::Simulation(Scene& scene, const CaseSpec& spec) : m_scene(scene), m_spec(spec)
+Simulation::Simulation(Scene& scene, const CaseSpec& spec)
+    : m_scene(scene), m_spec(spec), m_divergence(scene.bodies)
 {
     if (!spec.contact.enabled)
         return;
@@ -196,7 +197,7 @@ RunSummary Simulation::run(Index steps, const FrameCallback& on_frame, const Pro
                 static_step(step, summary);
             else
                 dynamic_step(summary);
-            check_divergence(m_scene.bodies);
+            m_divergence.check(m_scene.bodies);
             detect(summary);
         } catch (const NumericalError& error) {
             CORO_THROW(NumericalError, "step " << step << " (t = " << time_of(step) << "): " << error.what());

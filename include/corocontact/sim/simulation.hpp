@@ -9,6 +9,7 @@
 #include <corocontact/contact/plane_obstacle.hpp>
 #include <corocontact/core/surface_mesh.hpp>
 #include <corocontact/sim/contact_response.hpp>
+#include <corocontact/sim/divergence_check.hpp>
 #include <corocontact/sim/phase_times.hpp>
 #include <corocontact/solver/pcg.hpp>
 
@@ -112,6 +113,7 @@ private:
     struct EmbreeCheck;
     std::unique_ptr<EmbreeCheck> m_embree; // cross-check scenes, when asked for
     ContactResponse m_response;            // of the last detection, used by the next step
+    DivergenceCheck m_divergence;          // run after every step
 };
 
 /// PCG settings from the case's [solver] table.
