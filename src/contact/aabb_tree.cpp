@@ -30,33 +30,34 @@ TrianglePoint closest_point_on_segment(const Vec3& p, const Vec3& a, const Vec3&
 
 void AabbTree::face_plane(const double* A, const double* B, const double* C, WideNode& w, int k)
 {
-    // u = the float rounding of the unit normal; the slack is measured, not assumed: for x =
-    // A + s·e1 + t·e2 on the face, u·(x − A) = s·(u·e1) + t·(u·e2) lies within max(|u·e1|, |u·e2|)
-    // of 0 (computed in double, plus a margin for that rounding), and the offset's rounding to
-    // float is added. Any error in u only widens the slack, never breaks the bound.
-    const double e1[3] = {B[0] - A[0], B[1] - A[1], B[2] - A[2]};
-    const double e2[3] = {C[0] - A[0], C[1] - A[1], C[2] - A[2]};
-    const double n[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
-    const double len = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
-    if (!(len > 0.0) || !std::isfinite(len)) {
+    // In single precision: u = the normalised cross product of the edges rounded to float, the
+    // offset u·A. The slack is measured: for x = A + s·e1 + t·e2 on the face, u·(x − A) =
+    // s·(u·e1) + t·(u·e2) lies within max(|u·e1|, |u·e2|) of 0; the float evaluation of those
+    // dot products and of the offset (from float roundings of A, e1, e2: each within 2⁻²⁴ of
+    // its value) errs by less than 2⁻²¹·(|A|₁ + |e1|₁ + |e2|₁), which is added. Any error in u
+    // only widens the slack; |u| ≤ 1 + 2⁻²² (correctly rounded sqrt and division).
+    const float a[3] = {static_cast<float>(A[0]), static_cast<float>(A[1]), static_cast<float>(A[2])};
+    const float e1[3] = {static_cast<float>(B[0] - A[0]), static_cast<float>(B[1] - A[1]), static_cast<float>(B[2] - A[2])};
+    const float e2[3] = {static_cast<float>(C[0] - A[0]), static_cast<float>(C[1] - A[1]), static_cast<float>(C[2] - A[2])};
+    const float n[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
+    const float nn = n[0] * n[0] + n[1] * n[1] + n[2] * n[2];
+    if (!(nn > 1e-30f) || !(nn < 1e30f)) { // degenerate (or absurd) face: never pruned by its plane
         w.normal[0][k] = w.normal[1][k] = w.normal[2][k] = 0.0f;
         w.offset[k] = 0.0f;
         w.slack[k] = std::numeric_limits<float>::infinity();
         return;
     }
-    const float u[3] = {static_cast<float>(n[0] / len), static_cast<float>(n[1] / len), static_cast<float>(n[2] / len)};
-    const double ud[3] = {u[0], u[1], u[2]};
-    const double off = ud[0] * A[0] + ud[1] * A[1] + ud[2] * A[2];
-    const double s1 = std::abs(ud[0] * e1[0] + ud[1] * e1[1] + ud[2] * e1[2]);
-    const double s2 = std::abs(ud[0] * e2[0] + ud[1] * e2[1] + ud[2] * e2[2]);
-    const double magnitude = std::abs(e1[0]) + std::abs(e1[1]) + std::abs(e1[2]) + std::abs(e2[0]) + std::abs(e2[1]) +
-                             std::abs(e2[2]) + std::abs(A[0]) + std::abs(A[1]) + std::abs(A[2]);
-    const float off_f = static_cast<float>(off);
-    const double slack = std::max(s1, s2) + std::abs(static_cast<double>(off_f) - off) + 1e-14 * magnitude;
+    const float inv = 1.0f / std::sqrt(nn);
+    const float u[3] = {n[0] * inv, n[1] * inv, n[2] * inv};
+    const float off = u[0] * a[0] + u[1] * a[1] + u[2] * a[2];
+    const float s1 = std::abs(u[0] * e1[0] + u[1] * e1[1] + u[2] * e1[2]);
+    const float s2 = std::abs(u[0] * e2[0] + u[1] * e2[1] + u[2] * e2[2]);
+    const float magnitude = std::abs(a[0]) + std::abs(a[1]) + std::abs(a[2]) + std::abs(e1[0]) + std::abs(e1[1]) +
+                            std::abs(e1[2]) + std::abs(e2[0]) + std::abs(e2[1]) + std::abs(e2[2]);
     for (int j = 0; j < 3; ++j)
         w.normal[j][k] = u[j];
-    w.offset[k] = off_f;
-    w.slack[k] = detail::float_up(slack);
+    w.offset[k] = off;
+    w.slack[k] = (std::max(s1, s2) + magnitude * 0x1p-20f) * (1.0f + 0x1p-20f) + 0x1p-120f;
 }
 
 TrianglePoint closest_point_on_triangle(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c)
@@ -113,10 +114,14 @@ Index AabbTree::build_node(const std::vector<Vec3>& centroids, Index begin, Inde
     const Index node = static_cast<Index>(m_nodes.size());
     m_nodes.emplace_back();
     // Up to four parts, kept in range order: the largest part is split at the median of its
-    // centroids along their longest axis until there are four or all are single faces.
+    // centroids along their longest axis until there are `target` parts: every face on its own
+    // for up to four faces, else parts of at most four faces where that takes at most four
+    // parts (so the nodes above the faces are full), else four parts.
+    const Index n = end - begin;
+    const int target = n <= 4 ? static_cast<int>(n) : static_cast<int>(std::min<Index>(4, (n + 3) / 4));
     Index bounds[5] = {begin, end, end, end, end};
     int parts = 1;
-    while (parts < 4) {
+    while (parts < target) {
         int largest = 0;
         for (int k = 1; k < parts; ++k)
             if (bounds[k + 1] - bounds[k] > bounds[largest + 1] - bounds[largest])
@@ -176,6 +181,7 @@ void AabbTree::build(CRef<Positions> vertices, const Tris& faces)
     m_vertex_order.clear();
     m_vertex_blocks.clear();
     m_face_boxes.clear();
+    m_slot_vertices.clear();
     m_bounds = Aabb{};
     if (faces.rows() == 0)
         return;
@@ -225,45 +231,69 @@ void AabbTree::build(CRef<Positions> vertices, const Tris& faces)
         }
     m_vertex_blocks.resize((m_vertex_order.size() + VERTEX_BLOCK - 1) / VERTEX_BLOCK);
     m_face_boxes.resize(m_order.size());
+    m_slot_vertices.resize(3 * m_order.size());
+    for (std::size_t i = 0; i < m_order.size(); ++i)
+        for (int c = 0; c < 3; ++c)
+            m_slot_vertices[3 * i + static_cast<std::size_t>(c)] = faces(m_order[i], c);
     refit(vertices);
 }
 
 void AabbTree::refit_node(const double* data, std::ptrdiff_t stride, Index n)
 {
     WideNode& w = m_nodes[static_cast<std::size_t>(n)];
-    double lo[3] = {std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity(),
-                    std::numeric_limits<double>::infinity()};
-    double hi[3] = {-lo[0], -lo[1], -lo[2]};
+    // SSE2: (x, y) in one register, z in the low half of another.
+    __m128d lo_xy = _mm_set1_pd(std::numeric_limits<double>::infinity()), lo_z = lo_xy;
+    __m128d hi_xy = _mm_set1_pd(-std::numeric_limits<double>::infinity()), hi_z = hi_xy;
+    const __m128 abs_mask = _mm_castsi128_ps(_mm_set1_epi32(0x7fffffff));
+    const __m128 ulp = _mm_set1_ps(0x1p-23f), tiny = _mm_set1_ps(0x1p-126f);
+    alignas(16) float flo[4], fhi[4];
     for (int k = 0; k < w.count; ++k) {
         const Index c = w.child[k];
-        const Aabb* box;
+        __m128d bl_xy, bl_z, bh_xy, bh_z;
         if (c < 0) {
             const std::size_t slot = static_cast<std::size_t>(-1 - c);
-            const Index f = m_order[slot];
-            const double* a = data + stride * m_faces(f, 0);
-            const double* b = data + stride * m_faces(f, 1);
-            const double* d = data + stride * m_faces(f, 2);
+            const Index* fv = &m_slot_vertices[3 * slot];
+            const double* a = data + stride * fv[0];
+            const double* b = data + stride * fv[1];
+            const double* d = data + stride * fv[2];
+            const __m128d a_xy = _mm_loadu_pd(a), b_xy = _mm_loadu_pd(b), d_xy = _mm_loadu_pd(d);
+            const __m128d a_z = _mm_load_sd(a + 2), b_z = _mm_load_sd(b + 2), d_z = _mm_load_sd(d + 2);
+            bl_xy = _mm_min_pd(_mm_min_pd(a_xy, b_xy), d_xy);
+            bh_xy = _mm_max_pd(_mm_max_pd(a_xy, b_xy), d_xy);
+            bl_z = _mm_min_sd(_mm_min_sd(a_z, b_z), d_z);
+            bh_z = _mm_max_sd(_mm_max_sd(a_z, b_z), d_z);
             Aabb& fb = m_face_boxes[slot];
-            for (int j = 0; j < 3; ++j) {
-                fb.min[j] = std::min(std::min(a[j], b[j]), d[j]);
-                fb.max[j] = std::max(std::max(a[j], b[j]), d[j]);
-            }
-            box = &fb;
+            _mm_storeu_pd(fb.min.data(), bl_xy);
+            _mm_store_sd(fb.min.data() + 2, bl_z);
+            _mm_storeu_pd(fb.max.data(), bh_xy);
+            _mm_store_sd(fb.max.data() + 2, bh_z);
             face_plane(a, b, d, w, k);
         } else {
-            box = &m_node_boxes[static_cast<std::size_t>(c)];
+            const Aabb& cb = m_node_boxes[static_cast<std::size_t>(c)];
+            bl_xy = _mm_loadu_pd(cb.min.data());
+            bl_z = _mm_load_sd(cb.min.data() + 2);
+            bh_xy = _mm_loadu_pd(cb.max.data());
+            bh_z = _mm_load_sd(cb.max.data() + 2);
         }
+        lo_xy = _mm_min_pd(lo_xy, bl_xy);
+        lo_z = _mm_min_sd(lo_z, bl_z);
+        hi_xy = _mm_max_pd(hi_xy, bh_xy);
+        hi_z = _mm_max_sd(hi_z, bh_z);
+        // Outward float rounding (detail::float_down / float_up, three lanes at once).
+        const __m128 l = _mm_movelh_ps(_mm_cvtpd_ps(bl_xy), _mm_cvtpd_ps(bl_z));
+        const __m128 h = _mm_movelh_ps(_mm_cvtpd_ps(bh_xy), _mm_cvtpd_ps(bh_z));
+        _mm_store_ps(flo, _mm_sub_ps(l, _mm_add_ps(_mm_mul_ps(_mm_and_ps(l, abs_mask), ulp), tiny)));
+        _mm_store_ps(fhi, _mm_add_ps(h, _mm_add_ps(_mm_mul_ps(_mm_and_ps(h, abs_mask), ulp), tiny)));
         for (int j = 0; j < 3; ++j) {
-            const double bl = box->min[j], bh = box->max[j];
-            lo[j] = std::min(lo[j], bl);
-            hi[j] = std::max(hi[j], bh);
-            w.lo[j][k] = detail::float_down(bl);
-            w.hi[j][k] = detail::float_up(bh);
+            w.lo[j][k] = flo[j];
+            w.hi[j][k] = fhi[j];
         }
     }
     Aabb& nb = m_node_boxes[static_cast<std::size_t>(n)];
-    nb.min = Vec3(lo[0], lo[1], lo[2]);
-    nb.max = Vec3(hi[0], hi[1], hi[2]);
+    _mm_storeu_pd(nb.min.data(), lo_xy);
+    _mm_store_sd(nb.min.data() + 2, lo_z);
+    _mm_storeu_pd(nb.max.data(), hi_xy);
+    _mm_store_sd(nb.max.data() + 2, hi_z);
 }
 
 void AabbTree::refit_range(const double* data, std::ptrdiff_t stride, Index first, Index last)

@@ -123,6 +123,7 @@ private:
     std::vector<Index> m_task_roots;  // parallel refit: roots of the subtrees refit as tasks
     std::vector<Index> m_order;       // face of each slot, in leaf order
     std::vector<Aabb> m_face_boxes;   // exact box of the face in each slot, refit with the nodes
+    std::vector<Index> m_slot_vertices; // 3 per slot: the vertices of the face in that slot
     Aabb m_bounds;
     std::vector<Index> m_vertex_order;  // used vertices, first appearance in leaf order
     std::vector<Aabb> m_vertex_blocks;  // box of each VERTEX_BLOCK consecutive m_vertex_order entries
