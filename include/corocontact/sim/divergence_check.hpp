@@ -19,6 +19,7 @@
 
 #include <corocontact/sim/body.hpp>
 
+#include <string>
 #include <vector>
 
 namespace coro {
@@ -60,6 +61,11 @@ private:
     DivergenceLimits m_limits;
     std::vector<double> m_min_volumes;
 };
+
+/// Where the first non-finite position or velocity is, for a message after a solver reported a
+/// NaN or Inf: "body 'left': velocity of node 12 (mesh file order) is nan", or "" if all are
+/// finite. Serial; only meant for the error path.
+std::string locate_non_finite(const std::vector<Body>& bodies);
 
 /// DivergenceCheck(…).find() for one body, without keeping the precomputed data.
 DivergenceFinding find_divergence(const Body& body, const DivergenceLimits& limits = {});
