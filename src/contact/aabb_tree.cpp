@@ -28,7 +28,7 @@ TrianglePoint closest_point_on_segment(const Vec3& p, const Vec3& a, const Vec3&
 
 } // namespace
 
-void AabbTree::face_plane(const double* A, const double* B, const double* C, WideNode& w, int k)
+void AabbTree::face_plane(const double* A, const double* B, const double* C, FacePlanes& w, int k)
 {
     // In single precision: u = the normalised cross product of the edges rounded to float, the
     // offset u·A. The slack is measured: for x = A + s·e1 + t·e2 on the face, u·(x − A) =
@@ -146,15 +146,11 @@ Index AabbTree::build_node(const std::vector<Vec3>& centroids, Index begin, Inde
         ++parts;
     }
     WideNode& w = m_nodes[static_cast<std::size_t>(node)];
-    for (int k = 0; k < 4; ++k) {
+    for (int k = 0; k < 4; ++k)
         for (int c = 0; c < 3; ++c) {
             w.lo[c][k] = std::numeric_limits<float>::infinity();
             w.hi[c][k] = -std::numeric_limits<float>::infinity();
-            w.normal[c][k] = 0.0f;
         }
-        w.offset[k] = 0.0f;
-        w.slack[k] = std::numeric_limits<float>::infinity();
-    }
     w.count = parts;
     w.face_mask = 0;
     for (int k = 0; k < 4; ++k)
@@ -182,6 +178,8 @@ void AabbTree::build(CRef<Positions> vertices, const Tris& faces)
     m_vertex_blocks.clear();
     m_face_boxes.clear();
     m_slot_vertices.clear();
+    m_planes.clear();
+    m_planes_current = false;
     m_bounds = Aabb{};
     if (faces.rows() == 0)
         return;
@@ -267,7 +265,6 @@ void AabbTree::refit_node(const double* data, std::ptrdiff_t stride, Index n)
             _mm_store_sd(fb.min.data() + 2, bl_z);
             _mm_storeu_pd(fb.max.data(), bh_xy);
             _mm_store_sd(fb.max.data() + 2, bh_z);
-            face_plane(a, b, d, w, k);
         } else {
             const Aabb& cb = m_node_boxes[static_cast<std::size_t>(c)];
             bl_xy = _mm_loadu_pd(cb.min.data());
@@ -304,6 +301,7 @@ void AabbTree::refit_range(const double* data, std::ptrdiff_t stride, Index firs
 
 void AabbTree::refit(CRef<Positions> vertices)
 {
+    m_planes_current = false;
     if (m_nodes.empty())
         return;
     const double* data = vertices.data();
@@ -347,6 +345,43 @@ void AabbTree::refit(CRef<Positions> vertices)
         m_vertex_blocks[b].min = Vec3(lo[0], lo[1], lo[2]);
         m_vertex_blocks[b].max = Vec3(hi[0], hi[1], hi[2]);
     }
+}
+
+void AabbTree::update_planes(CRef<Positions> vertices) const
+{
+    if (m_planes_current)
+        return;
+    m_planes.resize(m_nodes.size());
+    const double* data = vertices.data();
+    const std::ptrdiff_t stride = vertices.outerStride();
+    const auto planes_of = [&](std::size_t n) {
+        const WideNode& w = m_nodes[n];
+        FacePlanes& fp = m_planes[n];
+        for (int k = 0; k < 4; ++k) {
+            const Index c = k < w.count ? w.child[k] : 0;
+            if (c >= 0) {
+                fp.normal[0][k] = fp.normal[1][k] = fp.normal[2][k] = 0.0f;
+                fp.offset[k] = 0.0f;
+                fp.slack[k] = std::numeric_limits<float>::infinity();
+                continue;
+            }
+            const Index* fv = &m_slot_vertices[3 * static_cast<std::size_t>(-1 - c)];
+            face_plane(data + stride * fv[0], data + stride * fv[1], data + stride * fv[2], fp, k);
+        }
+    };
+    // Every node's planes depend only on its own faces: any split gives the same result.
+    constexpr std::size_t GRAIN = 512;
+    if (m_nodes.size() < 4 * GRAIN) {
+        for (std::size_t n = 0; n < m_nodes.size(); ++n)
+            planes_of(n);
+    } else {
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, m_nodes.size(), GRAIN),
+                          [&](const tbb::blocked_range<std::size_t>& r) {
+                              for (std::size_t n = r.begin(); n < r.end(); ++n)
+                                  planes_of(n);
+                          });
+    }
+    m_planes_current = true;
 }
 
 const Aabb& AabbTree::bounds() const { return m_bounds; }
@@ -445,7 +480,8 @@ AabbTree::Nearest AabbTree::nearest(CRef<Positions> vertices, const Vec3& point,
         --top;
         if (stack_d2[top] > threshold)
             continue;
-        const WideNode& node = m_nodes[static_cast<std::size_t>(stack[top])];
+        const std::size_t node_index = static_cast<std::size_t>(stack[top]);
+        const WideNode& node = m_nodes[node_index];
         __m128 sum = zero;
         for (int j = 0; j < 3; ++j) {
             const __m128 d = _mm_max_ps(_mm_max_ps(_mm_sub_ps(_mm_load_ps(node.lo[j]), p_hi[j]),
@@ -472,14 +508,15 @@ AabbTree::Nearest AabbTree::nearest(CRef<Positions> vertices, const Vec3& point,
         // A face whose plane slab lies beyond the threshold is skipped: |u·p − offset| is
         // computed in float from p's rounding; the error of that (a few float ulps of
         // |p|₁ + |offset|, taken 8 times over) is subtracted before the comparison.
-        if (mask & node.face_mask) {
-            __m128 dot = _mm_sub_ps(_mm_mul_ps(_mm_load_ps(node.normal[0]), p_f[0]), _mm_load_ps(node.offset));
-            dot = _mm_add_ps(dot, _mm_mul_ps(_mm_load_ps(node.normal[1]), p_f[1]));
-            dot = _mm_add_ps(dot, _mm_mul_ps(_mm_load_ps(node.normal[2]), p_f[2]));
+        if ((mask & node.face_mask) && m_planes_current) {
+            const FacePlanes& fp = m_planes[node_index];
+            __m128 dot = _mm_sub_ps(_mm_mul_ps(_mm_load_ps(fp.normal[0]), p_f[0]), _mm_load_ps(fp.offset));
+            dot = _mm_add_ps(dot, _mm_mul_ps(_mm_load_ps(fp.normal[1]), p_f[1]));
+            dot = _mm_add_ps(dot, _mm_mul_ps(_mm_load_ps(fp.normal[2]), p_f[2]));
             const __m128 abs_mask = _mm_castsi128_ps(_mm_set1_epi32(0x7fffffff));
-            const __m128 error = _mm_add_ps(p_error, _mm_mul_ps(_mm_and_ps(_mm_load_ps(node.offset), abs_mask),
+            const __m128 error = _mm_add_ps(p_error, _mm_mul_ps(_mm_and_ps(_mm_load_ps(fp.offset), abs_mask),
                                                                 _mm_set1_ps(0x1p-20f)));
-            const __m128 lower = _mm_sub_ps(_mm_sub_ps(_mm_and_ps(dot, abs_mask), _mm_load_ps(node.slack)), error);
+            const __m128 lower = _mm_sub_ps(_mm_sub_ps(_mm_and_ps(dot, abs_mask), _mm_load_ps(fp.slack)), error);
             // (1 − 2⁻¹⁸)·lower ≤ the distance (|u| ≤ 1 + 2⁻²²); skipped when its square is above
             // the threshold.
             const __m128 scaled = _mm_mul_ps(_mm_max_ps(lower, zero), _mm_set1_ps(1.0f - 0x1p-18f));

@@ -38,6 +38,22 @@ std::vector<ContactPoint> run_detection(const std::vector<ContactSurface>& surfa
             blocks.push_back({k, b, std::min(n, b + VERTEX_BLOCK)});
     }
 
+    if (contact_data) { // the depth searches skip faces by their planes: bring those up to date
+        std::vector<Index> others;
+        for (const PairCandidates& c : candidates)
+            if (!c.vertices.empty())
+                others.push_back(c.other);
+        std::sort(others.begin(), others.end());
+        others.erase(std::unique(others.begin(), others.end()), others.end());
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, others.size(), 1),
+                          [&](const tbb::blocked_range<std::size_t>& r) {
+                              for (std::size_t i = r.begin(); i < r.end(); ++i) {
+                                  const ContactSurface& s = surfaces[static_cast<std::size_t>(others[i])];
+                                  s.tree.update_planes(s.vertices);
+                              }
+                          });
+    }
+
     tbb::enumerable_thread_specific<std::vector<ContactPoint>> local_points;
     tbb::enumerable_thread_specific<DetectionStats> local_stats;
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, blocks.size(), 1),

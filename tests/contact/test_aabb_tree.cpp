@@ -261,9 +261,23 @@ TEST(AabbTree, NearestIsTheBruteForceMinimumWithSmallestFaceOnTies)
     // distance, face index): deep points inside a sphere (many faces nearly equally far, where
     // box and plane bounds prune hardest), points near the surface, and points of a structured
     // box on its grid planes (exact ties between faces).
+    // Each surface is queried without face planes, with them (update_planes), and after a refit
+    // to deformed positions (planes out of date again, then updated).
     std::mt19937 rng(12);
+    std::vector<ContactSurface> cases;
     for (const ContactSurface& s : {surface_of(make_sphere(Vec3(0.1, -0.2, 0.05), 1.0, 10), "sphere"),
                                     surface_of(make_box(Vec3(0, 0, 0), Vec3(1, 2, 1), {3, 6, 3}), "box")}) {
+        cases.push_back(s);
+        cases.push_back(s);
+        cases.back().tree.update_planes(cases.back().vertices);
+        cases.push_back(s);
+        cases.back().tree.update_planes(cases.back().vertices);
+        cases.back().vertices = deform(cases.back().vertices, rng);
+        cases.back().tree.refit(cases.back().vertices);
+        cases.push_back(cases.back());
+        cases.back().tree.update_planes(cases.back().vertices);
+    }
+    for (const ContactSurface& s : cases) {
         const Aabb box = s.tree.bounds();
         for (int q = 0; q < 300; ++q) {
             Vec3 p = random_point(box.min.array() - 0.2, box.max.array() + 0.2, rng);

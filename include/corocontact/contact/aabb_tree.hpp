@@ -40,6 +40,13 @@ public:
     /// children, so the result does not depend on the thread count.
     void refit(CRef<Positions> vertices);
 
+    /// Computes the face planes that let nearest() skip faces by their plane distance, for the
+    /// positions of the last build or refit (which leave them out of date: nearest() is exact
+    /// either way, only slower without them). A cache: const, but not to be called concurrently
+    /// with other queries on the same tree. Large trees compute them in parallel tasks.
+    /// @param[in] vertices  the positions the tree was last built or refit with
+    void update_planes(CRef<Positions> vertices) const;
+
     /// Box of the whole surface (empty for an empty tree).
     const Aabb& bounds() const;
     Index num_faces() const { return static_cast<Index>(m_faces.rows()); }
@@ -100,12 +107,6 @@ private:
     struct alignas(64) WideNode {
         float lo[3][4]; ///< [coordinate][child] box minimum
         float hi[3][4]; ///< [coordinate][child] box maximum
-        /// Face children: unit normal u, offset u·A and slack s such that every point x of the
-        /// face has |u·x − offset| ≤ s (s = +∞ for a degenerate face; node children: +∞), so
-        /// (|u·p − offset| − s)/|u| bounds the face's distance to p from below.
-        float normal[3][4];
-        float offset[4];
-        float slack[4];
         Index child[4]; ///< ≥ 0: node index; < 0: the face in slot −1 − child of m_order
         Index count;    ///< children used (2..4; 1 only for a one-face tree), lanes 0..count−1
         Index face_mask; ///< bit k set: child k is a face
@@ -115,13 +116,23 @@ private:
     Index build_node(const std::vector<Vec3>& centroids, Index begin, Index end, int depth);
     void refit_range(const double* data, std::ptrdiff_t stride, Index first, Index last);
     void refit_node(const double* data, std::ptrdiff_t stride, Index n);
-    static void face_plane(const double* A, const double* B, const double* C, WideNode& w, int k);
+    /// The planes of a node's face children: unit normal u, offset u·A and slack s such that
+    /// every point x of the face has |u·x − offset| ≤ s (s = +∞ for a degenerate face and for
+    /// node children), so (|u·p − offset| − s)/|u| bounds the face's distance to p from below.
+    struct alignas(16) FacePlanes {
+        float normal[3][4];
+        float offset[4];
+        float slack[4];
+    };
+    static void face_plane(const double* A, const double* B, const double* C, FacePlanes& w, int k);
 
     std::vector<WideNode> m_nodes;  // root at 0; every subtree is a contiguous range after its root
     std::vector<Aabb> m_node_boxes; // exact box of each node (union of its children's)
     std::vector<Index> m_subtree_end; // one past the last node of each node's subtree
     std::vector<Index> m_task_roots;  // parallel refit: roots of the subtrees refit as tasks
     std::vector<Index> m_order;       // face of each slot, in leaf order
+    mutable std::vector<FacePlanes> m_planes; // per node; a cache filled by update_planes
+    mutable bool m_planes_current = false;    // m_planes match the positions of the last refit
     std::vector<Aabb> m_face_boxes;   // exact box of the face in each slot, refit with the nodes
     std::vector<Index> m_slot_vertices; // 3 per slot: the vertices of the face in that slot
     Aabb m_bounds;
