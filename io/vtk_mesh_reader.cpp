@@ -213,9 +213,18 @@ std::size_t after_keyword_line(std::string_view text, std::string_view keyword, 
 /// `CELL_TYPES` must declare the same n.
 void check_legacy_cells(const fs::path& path, std::string_view text)
 {
-    const std::size_t version_at = text.find("Version ");
-    const bool new_layout = version_at != std::string_view::npos && version_at < text.find('\n') &&
-                            version_at + 8 < text.size() && text[version_at + 8] >= '5';
+    const std::string_view first_line = text.substr(0, text.find('\n'));
+    const std::size_t version_at = first_line.find("Version ");
+    int major = 0;
+    const bool has_version =
+        version_at != std::string_view::npos &&
+        std::from_chars(first_line.data() + version_at + 8,
+                        first_line.data() + first_line.size(), major)
+                .ec == std::errc();
+    CORO_CHECK(has_version && major >= 1, InputError,
+               path.string() << ":1: expected '# vtk DataFile Version <major>.<minor>', found "
+                             << detail::in_quotes(first_line));
+    const bool new_layout = major >= 5; // OFFSETS/CONNECTIVITY instead of npts-prefixed runs
     long line = 0;
     std::string_view header;
     const std::size_t data = after_keyword_line(text, "CELLS", line, header);
