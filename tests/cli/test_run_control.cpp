@@ -12,6 +12,7 @@
 #include <vtkInformation.h>
 #include <vtkMultiBlockDataSet.h>
 #include <vtkNew.h>
+#include <vtkOutputWindow.h>
 #include <vtkPointData.h>
 #include <vtkUnstructuredGrid.h>
 #include <vtkXMLMultiBlockDataReader.h>
@@ -92,15 +93,40 @@ bool wait_for_frames(const fs::path& pvd, std::size_t frames, double seconds)
     return false;
 }
 
+// Collects what VTK reports instead of printing it, so a reader's complaint fails the test.
+class RecordingOutputWindow : public vtkOutputWindow {
+public:
+    static RecordingOutputWindow* New()
+    {
+        auto* window = new RecordingOutputWindow;
+        window->InitializeObjectBase();
+        return window;
+    }
+    void DisplayErrorText(const char* text) override { m_messages += text; }
+    void DisplayWarningText(const char* text) override { m_messages += text; }
+    std::string take()
+    {
+        std::string messages;
+        messages.swap(m_messages);
+        return messages;
+    }
+
+private:
+    std::string m_messages;
+};
+
 // Loads every file the .pvd lists with VTK's readers; each must hold the blocks named in
 // `bodies`, with points, cells and a finite displacement per point. Returns the count loaded.
 int expect_every_listed_frame_loads(const fs::path& pvd, const std::vector<std::string>& bodies)
 {
+    vtkNew<RecordingOutputWindow> messages;
+    vtkOutputWindow::SetInstance(messages);
     int loaded = 0;
     for (const std::string& frame : listed_frames(pvd)) {
         vtkNew<vtkXMLMultiBlockDataReader> reader;
         reader->SetFileName((pvd.parent_path() / frame).string().c_str());
         reader->Update();
+        EXPECT_EQ(messages->take(), "") << frame << ": VTK reported errors while reading";
         auto* blocks = vtkMultiBlockDataSet::SafeDownCast(reader->GetOutput());
         EXPECT_NE(blocks, nullptr) << frame;
         if (blocks == nullptr)
@@ -123,6 +149,7 @@ int expect_every_listed_frame_loads(const fs::path& pvd, const std::vector<std::
         }
         ++loaded;
     }
+    vtkOutputWindow::SetInstance(nullptr);
     return loaded;
 }
 
