@@ -493,22 +493,13 @@ AabbTree::Nearest AabbTree::nearest(CRef<Positions> vertices, const Vec3& point,
         if (mask == 0)
             continue;
         _mm_store_ps(d2, sum);
-        int order[4];
-        int n = 0;
-        for (int k = 0; k < 4; ++k)
-            if (mask & (1 << k)) {
-                int j = n++;
-                while (j > 0 && d2[order[j - 1]] > d2[k]) {
-                    order[j] = order[j - 1];
-                    --j;
-                }
-                order[j] = k;
-            }
-        // Faces first, nearer first; then the child nodes, the nearest on top of the stack.
+        // Faces first (lane order: of equally near faces the smallest index wins anyway), then
+        // the child nodes, the nearest on top of the stack.
         // A face whose plane slab lies beyond the threshold is skipped: |u·p − offset| is
         // computed in float from p's rounding; the error of that (a few float ulps of
         // |p|₁ + |offset|, taken 8 times over) is subtracted before the comparison.
-        if ((mask & node.face_mask) && m_planes_current) {
+        int faces = mask & node.face_mask;
+        if (faces != 0 && m_planes_current) {
             const FacePlanes& fp = m_planes[node_index];
             __m128 dot = _mm_sub_ps(_mm_mul_ps(_mm_load_ps(fp.normal[0]), p_f[0]), _mm_load_ps(fp.offset));
             dot = _mm_add_ps(dot, _mm_mul_ps(_mm_load_ps(fp.normal[1]), p_f[1]));
@@ -520,19 +511,20 @@ AabbTree::Nearest AabbTree::nearest(CRef<Positions> vertices, const Vec3& point,
             // (1 − 2⁻¹⁸)·lower ≤ the distance (|u| ≤ 1 + 2⁻²²); skipped when its square is above
             // the threshold.
             const __m128 scaled = _mm_mul_ps(_mm_max_ps(lower, zero), _mm_set1_ps(1.0f - 0x1p-18f));
-            mask &= ~_mm_movemask_ps(_mm_cmpgt_ps(_mm_mul_ps(scaled, scaled), _mm_set1_ps(threshold)));
+            faces &= ~_mm_movemask_ps(_mm_cmpgt_ps(_mm_mul_ps(scaled, scaled), _mm_set1_ps(threshold)));
         }
-        for (int i = 0; i < n; ++i) {
-            const Index c = node.child[order[i]];
-            if (c >= 0 || d2[order[i]] > threshold || !(mask & (1 << order[i])))
+        for (; faces != 0; faces &= faces - 1) {
+            const int k = __builtin_ctz(static_cast<unsigned>(faces));
+            if (d2[k] > threshold)
                 continue;
-            const Index f = m_order[static_cast<std::size_t>(-1 - c)];
-            const double* A = data + stride * m_faces(f, 0);
-            const double* B = data + stride * m_faces(f, 1);
-            const double* C = data + stride * m_faces(f, 2);
+            const Index* fv = &m_slot_vertices[3 * static_cast<std::size_t>(-1 - node.child[k])];
+            const double* A = data + stride * fv[0];
+            const double* B = data + stride * fv[1];
+            const double* C = data + stride * fv[2];
             const TrianglePoint q =
                 closest_point_on_triangle(point, Vec3(A[0], A[1], A[2]), Vec3(B[0], B[1], B[2]), Vec3(C[0], C[1], C[2]));
             const double dq = (q.point - point).squaredNorm();
+            const Index f = m_order[static_cast<std::size_t>(-1 - node.child[k])];
             if (dq < best_d2 || (dq == best_d2 && f < best.face)) {
                 best_d2 = dq;
                 threshold = detail::float_threshold(best_d2);
@@ -541,12 +533,16 @@ AabbTree::Nearest AabbTree::nearest(CRef<Positions> vertices, const Vec3& point,
                 best.barycentric = q.barycentric;
             }
         }
-        for (int i = n; i-- > 0;) {
-            const Index c = node.child[order[i]];
-            if (c < 0)
-                continue;
-            stack[top] = c;
-            stack_d2[top++] = d2[order[i]];
+        for (int m = mask & ~node.face_mask; m != 0;) {
+            int far = __builtin_ctz(static_cast<unsigned>(m));
+            for (int rest = m & (m - 1); rest != 0; rest &= rest - 1) {
+                const int k = __builtin_ctz(static_cast<unsigned>(rest));
+                if (d2[k] > d2[far])
+                    far = k;
+            }
+            stack[top] = node.child[far];
+            stack_d2[top++] = d2[far];
+            m &= ~(1 << far);
         }
     }
     if (best.face < 0) // a bound below the true distance (an invalid hint): search again without it

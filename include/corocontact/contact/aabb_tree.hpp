@@ -67,7 +67,7 @@ public:
     /// The face boxes are the bounding rectangles of Eq. 4 (closed here, grown by `tolerance`).
     /// `visit` either returns void (every such face is visited) or a double, the largest
     /// distance along the axis still of interest: subtrees whose boxes lie farther than the
-    /// smallest value returned so far from `point` along the axis are skipped. Children are
+    /// smallest value returned so far from `point` along the axis are skipped. Child nodes are
     /// visited nearer first; the order depends only on the tree and `point` (deterministic).
     template <class Visit>
     void faces_on_axis_line(const Vec3& point, int axis, double tolerance, Visit&& visit) const;
@@ -204,28 +204,16 @@ void AabbTree::faces_on_axis_line(const Vec3& point, int axis, double tolerance,
         if (mask == 0)
             continue;
         _mm_store_ps(gaps, gap);
-        // Faces now (nearer first), then child nodes pushed farther first (nearer on top).
-        int order[4];
-        int n = 0;
-        for (int k = 0; k < 4; ++k)
-            if (mask & (1 << k)) {
-                int j = n++;
-                while (j > 0 && gaps[order[j - 1]] > gaps[k]) {
-                    order[j] = order[j - 1];
-                    --j;
-                }
-                order[j] = k;
-            }
-        for (int i = 0; i < n; ++i) {
-            const Index c = node.child[order[i]];
-            if (c >= 0)
-                continue;
-            const std::size_t slot = static_cast<std::size_t>(-1 - c);
+        // The node's faces now, in lane order; then its child nodes, pushed farther first so
+        // that the nearer ones are visited first.
+        for (int m = mask & node.face_mask; m != 0; m &= m - 1) {
+            const int k = __builtin_ctz(static_cast<unsigned>(m));
+            const std::size_t slot = static_cast<std::size_t>(-1 - node.child[k]);
             const Aabb& fb = m_face_boxes[slot]; // the exact test
             if (pu < fb.min[u] - tolerance || pu > fb.max[u] + tolerance || pv < fb.min[v] - tolerance ||
                 pv > fb.max[v] + tolerance)
                 continue;
-            if (static_cast<double>(gaps[order[i]]) > cutoff * (1.0 + 0x1p-20))
+            if (static_cast<double>(gaps[k]) > cutoff * (1.0 + 0x1p-20))
                 continue;
             const Index face = m_order[slot];
             if constexpr (std::is_void_v<decltype(visit(face))>) {
@@ -238,12 +226,16 @@ void AabbTree::faces_on_axis_line(const Vec3& point, int axis, double tolerance,
                 }
             }
         }
-        for (int i = n; i-- > 0;) {
-            const Index c = node.child[order[i]];
-            if (c < 0)
-                continue;
-            stack[top] = c;
-            stack_gap[top++] = gaps[order[i]];
+        for (int m = mask & ~node.face_mask; m != 0;) {
+            int far = __builtin_ctz(static_cast<unsigned>(m));
+            for (int rest = m & (m - 1); rest != 0; rest &= rest - 1) {
+                const int k = __builtin_ctz(static_cast<unsigned>(rest));
+                if (gaps[k] > gaps[far])
+                    far = k;
+            }
+            stack[top] = node.child[far];
+            stack_gap[top++] = gaps[far];
+            m &= ~(1 << far);
         }
     }
 }
