@@ -94,16 +94,27 @@ std::vector<ContactPoint> run_detection(const std::vector<ContactSurface>& surfa
                           }
                       });
 
-    std::vector<ContactPoint> points;
+    // Sorted by (body, vertex, other), which is unique per point: small keys are sorted, the
+    // points moved once.
+    struct Key {
+        Index body, vertex, other;
+        const ContactPoint* point;
+    };
+    std::vector<Key> keys;
     std::size_t total = 0;
     for (const auto& part : local_points)
         total += part.size();
-    points.reserve(total);
+    keys.reserve(total);
     for (const auto& part : local_points)
-        points.insert(points.end(), part.begin(), part.end());
-    std::sort(points.begin(), points.end(), [](const ContactPoint& a, const ContactPoint& b) {
+        for (const ContactPoint& c : part)
+            keys.push_back({c.body, c.vertex, c.other, &c});
+    std::sort(keys.begin(), keys.end(), [](const Key& a, const Key& b) {
         return std::tie(a.body, a.vertex, a.other) < std::tie(b.body, b.vertex, b.other);
     });
+    std::vector<ContactPoint> points;
+    points.reserve(total);
+    for (const Key& k : keys)
+        points.push_back(*k.point);
     if (stats) {
         DetectionStats sum;
         sum.pairs = pairs;
