@@ -28,6 +28,7 @@
 #include <cctype>
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <limits>
 #include <new>
 #include <string_view>
@@ -296,6 +297,113 @@ void check_legacy_cells(const fs::path& path, std::string_view text)
                              << n << " cells use " << consumed);
 }
 
+/// The value of `name="..."` in the XML tag around `at` (searched forward from `at`, within the
+/// tag); empty if absent.
+std::string_view xml_attribute(std::string_view text, std::size_t at, std::string_view name)
+{
+    const std::size_t tag_end = std::min(text.find('>', at), text.size());
+    const std::string key = " " + std::string(name) + "=\"";
+    const std::size_t found = text.substr(0, tag_end).find(key, at);
+    if (found == std::string_view::npos)
+        return {};
+    const std::size_t begin = found + key.size();
+    const std::size_t end = std::min(text.find('"', begin), tag_end);
+    return text.substr(begin, end - begin);
+}
+
+/// The first `n` bytes of base64 text (blanks skipped); fewer if the text ends or is not base64.
+std::string decode_base64_prefix(std::string_view text, std::size_t n)
+{
+    const auto value = [](char c) -> int {
+        if (c >= 'A' && c <= 'Z')
+            return c - 'A';
+        if (c >= 'a' && c <= 'z')
+            return c - 'a' + 26;
+        if (c >= '0' && c <= '9')
+            return c - '0' + 52;
+        return c == '+' ? 62 : c == '/' ? 63 : -1;
+    };
+    std::string out;
+    unsigned bits = 0;
+    int n_bits = 0;
+    for (const char c : text) {
+        if (out.size() >= n)
+            break;
+        if (std::isspace(static_cast<unsigned char>(c)) != 0)
+            continue;
+        const int v = value(c);
+        if (v < 0)
+            break;
+        bits = (bits << 6) | static_cast<unsigned>(v);
+        n_bits += 6;
+        if (n_bits >= 8) {
+            n_bits -= 8;
+            out += static_cast<char>((bits >> n_bits) & 0xffu);
+        }
+    }
+    return out;
+}
+
+/// Compressed XML arrays start with a header whose first word is the number of blocks; VTK 9.1
+/// sizes a vector from it before reading anything else, so a corrupt word stalls or exhausts
+/// memory. Each block needs at least one header word in the file: more blocks than the file
+/// has bytes for is rejected here, for appended and inline binary arrays.
+void check_compression_headers(const fs::path& path, std::string_view text)
+{
+    const std::size_t root = text.find("<VTKFile");
+    if (root == std::string_view::npos || xml_attribute(text, root, "compressor").empty())
+        return;
+    const std::size_t word = xml_attribute(text, root, "header_type") == "UInt64" ? 8 : 4;
+    const bool big_endian = xml_attribute(text, root, "byte_order") == "BigEndian";
+    const std::size_t appended_tag = text.find("<AppendedData");
+    const bool appended_raw =
+        appended_tag != std::string_view::npos && xml_attribute(text, appended_tag, "encoding") == "raw";
+    const std::size_t appended_data =
+        appended_tag == std::string_view::npos ? std::string_view::npos : text.find('_', appended_tag);
+    const std::size_t xml_end = std::min(appended_tag, text.size());
+
+    for (std::size_t at = text.find("<DataArray"); at < xml_end; at = text.find("<DataArray", at + 1)) {
+        const std::string_view format = xml_attribute(text, at, "format");
+        std::string header;
+        if (format == "appended") {
+            std::uint64_t offset = 0;
+            std::size_t used = 0;
+            if (appended_data == std::string_view::npos ||
+                !leading_count(xml_attribute(text, at, "offset"), offset, used))
+                continue; // VTK reports it
+            if (offset >= text.size() - appended_data - 1)
+                continue;
+            const std::string_view data = text.substr(appended_data + 1 + offset);
+            header = appended_raw ? std::string(data.substr(0, word))
+                                  : decode_base64_prefix(data, word);
+        } else if (format == "binary") {
+            const std::size_t body = text.find('>', at);
+            if (body == std::string_view::npos || text[body - 1] == '/')
+                continue;
+            header = decode_base64_prefix(text.substr(body + 1), word);
+        } else {
+            continue;
+        }
+        if (header.size() < word)
+            continue; // VTK reports a short header
+        if (big_endian)
+            std::reverse(header.begin(), header.end());
+        std::uint64_t blocks = 0;
+        if (word == 4) {
+            std::uint32_t w = 0;
+            std::memcpy(&w, header.data(), 4);
+            blocks = w;
+        } else {
+            std::memcpy(&blocks, header.data(), 8);
+        }
+        CORO_CHECK(blocks <= text.size() / word, InputError,
+                   path.string() << ":" << 1 + std::count(text.begin(), text.begin() + static_cast<std::ptrdiff_t>(at), '\n')
+                                 << ": the compressed data of this DataArray declares " << blocks
+                                 << " blocks, more than the file's " << text.size()
+                                 << " bytes can hold (corrupt data)");
+    }
+}
+
 /// Runs `reader` with every VTK message recorded; any message or a reader error code is an
 /// InputError naming the file.
 void run_reader(const fs::path& path, vtkAlgorithm* reader)
@@ -419,6 +527,7 @@ TetMesh read_vtk_mesh(const std::filesystem::path& path)
         run_reader(path, reader);
         return to_tet_mesh(path, reader->GetOutput());
     }
+    check_compression_headers(path, text);
     vtkNew<vtkXMLUnstructuredGridReader> reader;
     reader->SetFileName(path.c_str());
     run_reader(path, reader);

@@ -137,6 +137,17 @@ TEST(ReadVtkMesh, RejectsCellTypeCountDifferentFromCellCount)
                              "at line 83");
 }
 
+// Found by mutation fuzzing: VTK 9.1 sizes a vector from a compressed array's block count
+// before reading anything, so a corrupt count stalls the reader for minutes.
+TEST(ReadVtkMesh, RejectsCorruptCompressionHeaderQuickly)
+{
+    std::string bytes = bytes_of(data_dir() / "vtk" / "cube_appended.vtu");
+    bytes.replace(bytes.find("_AQAAAACAAAA"), 12, "_////AACAAAA");
+    const fs::path path = test::write_text(scratch() / "blocks.vtu", bytes);
+    expect_quiet_error(path, "blocks.vtu:10: the compressed data of this DataArray declares "
+                             "16777215 blocks");
+}
+
 TEST(ReadVtkMesh, RejectsGridWithoutTets)
 {
     const fs::path path = test::write_text(scratch() / "triangle.vtk",
