@@ -304,3 +304,32 @@ TEST(AabbTree, NearestIsTheBruteForceMinimumWithSmallestFaceOnTies)
         }
     }
 }
+
+TEST(AabbTree, NearestWithPlanesOfALargeTreeEqualsBruteForce)
+{
+    // Enough nodes for update_planes' parallel path; deep and shallow points.
+    std::mt19937 rng(13);
+    ContactSurface s = surface_of(make_sphere(Vec3(0.0, 0.0, 0.0), 1.0, 24), "large sphere");
+    s.vertices = deform(s.vertices, rng);
+    s.tree.refit(s.vertices);
+    ASSERT_GT(s.faces.rows(), 6000);
+    tbb::task_arena(2).execute([&] { s.tree.update_planes(s.vertices); });
+    for (int q = 0; q < 60; ++q) {
+        const Vec3 p = random_point(Vec3::Constant(q % 2 == 0 ? -0.3 : -1.2), Vec3::Constant(q % 2 == 0 ? 0.3 : 1.2), rng);
+        double best = std::numeric_limits<double>::infinity();
+        Index best_face = -1;
+        for (Index f = 0; f < s.faces.rows(); ++f) {
+            const TrianglePoint t = closest_point_on_triangle(p, s.vertices.row(s.faces(f, 0)).transpose(),
+                                                              s.vertices.row(s.faces(f, 1)).transpose(),
+                                                              s.vertices.row(s.faces(f, 2)).transpose());
+            const double d2 = (t.point - p).squaredNorm();
+            if (d2 < best) {
+                best = d2;
+                best_face = f;
+            }
+        }
+        const AabbTree::Nearest got = s.tree.nearest(s.vertices, p);
+        ASSERT_EQ(got.face, best_face) << "query " << q;
+        ASSERT_EQ(got.distance, std::sqrt(best)) << "query " << q;
+    }
+}

@@ -40,7 +40,8 @@ public:
     /// children, so the result does not depend on the thread count.
     void refit(CRef<Positions> vertices);
 
-    /// Computes the face planes that let nearest() skip faces by their plane distance, for the
+    /// Computes the face planes and node slabs that let nearest() skip faces and subtrees by
+    /// their distance along a normal, for the
     /// positions of the last build or refit (which leave them out of date: nearest() is exact
     /// either way, only slower without them). A cache: const, but not to be called concurrently
     /// with other queries on the same tree. Large trees compute them in parallel tasks.
@@ -116,9 +117,10 @@ private:
     Index build_node(const std::vector<Vec3>& centroids, Index begin, Index end, int depth);
     void refit_range(const double* data, std::ptrdiff_t stride, Index first, Index last);
     void refit_node(const double* data, std::ptrdiff_t stride, Index n);
-    /// The planes of a node's face children: unit normal u, offset u·A and slack s such that
-    /// every point x of the face has |u·x − offset| ≤ s (s = +∞ for a degenerate face and for
-    /// node children), so (|u·p − offset| − s)/|u| bounds the face's distance to p from below.
+    /// The planes of a node's children: unit normal u, offset and slack s such that every point
+    /// x of the child (a face, or the faces of a child node) has |u·x − offset| ≤ s (s = +∞ for
+    /// a degenerate face or a child whose faces' normals nearly cancel), so
+    /// (|u·p − offset| − s)/|u| bounds the child's distance to p from below.
     struct alignas(16) FacePlanes {
         float normal[3][4];
         float offset[4];
@@ -129,6 +131,7 @@ private:
     std::vector<WideNode> m_nodes;  // root at 0; every subtree is a contiguous range after its root
     std::vector<Aabb> m_node_boxes; // exact box of each node (union of its children's)
     std::vector<Index> m_subtree_end; // one past the last node of each node's subtree
+    std::vector<Index> m_node_slots;  // 2 per node: the range of slots (faces) of its subtree
     std::vector<Index> m_task_roots;  // parallel refit: roots of the subtrees refit as tasks
     std::vector<Index> m_order;       // face of each slot, in leaf order
     mutable std::vector<FacePlanes> m_planes; // per node; a cache filled by update_planes
