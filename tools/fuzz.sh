@@ -79,7 +79,7 @@ for t in "${targets[@]}"; do
     result="FOUND (exit $rc): ${artifact:-see the log}"
     grep -m1 -E 'ERROR: (AddressSanitizer|libFuzzer|UndefinedBehaviorSanitizer)|runtime error|terminate called' "$log" || true
   fi
-  summary+=("$(printf '%-7s %10s execs %6s s  %5s new corpus files  %s' "$t" "${execs:-?}" "$elapsed" "$corpus" "$result")")
+  summary+=("$(printf '%-7s %10s execs %6s s  %5s corpus files  %s' "$t" "${execs:-?}" "$elapsed" "$corpus" "$result")")
 done
 
 echo
