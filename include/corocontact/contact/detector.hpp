@@ -44,6 +44,9 @@ struct DetectionSettings {
 /// tasks; the result is sorted by (body, vertex, other), so it does not depend on scheduling.
 /// Vertices lying exactly on the other surface (touching bodies) are not inside (exact mode;
 /// see inside_test).
+/// With settings.contact_data it brings the face-plane cache of the surfaces that get depth
+/// queries up to date (AabbTree::update_planes): two calls must not run concurrently on the
+/// same surfaces.
 /// @param[in] surfaces  one per body, trees refit to the current positions
 std::vector<ContactPoint> detect_contacts(const std::vector<ContactSurface>& surfaces,
                                           const DetectionSettings& settings, DetectionStats* stats = nullptr);
