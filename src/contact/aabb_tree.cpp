@@ -353,7 +353,7 @@ void AabbTree::refit(CRef<Positions> vertices)
 void AabbTree::update_planes(CRef<Positions> vertices) const
 {
     // Subtrees of more faces get no slab: computing one costs a pass over their vertices.
-    constexpr std::size_t SLAB_MAX_FACES = 64;
+    constexpr std::size_t SLAB_MAX_FACES = 256;
     if (m_planes_current)
         return;
     m_planes.resize(m_nodes.size());
