@@ -1,5 +1,8 @@
 #include <corocontact/io/mesh_readers.hpp>
 
+#include "detail/msh_binary.hpp"
+#include "detail/msh_builder.hpp"
+#include "detail/number_tokens.hpp"
 #include "detail/text_input.hpp"
 
 #include <corocontact/core/error.hpp>
@@ -32,12 +35,8 @@ using detail::LineCursor;
 using detail::read_file;
 using detail::trimmed;
 
-/// Upper bound on what a header count may pre-allocate: counts are input, so a corrupt
-/// header must not be able to request gigabytes; beyond this, containers grow as they read.
-constexpr std::size_t RESERVE_CAP = std::size_t{1} << 16;
-
-/// Gmsh element type of the 4-node tetrahedron; every other type is skipped.
-constexpr int MSH_TET4 = 4;
+using detail::MSH_TET4;
+using detail::MshBuilder;
 
 /// Returns the next line, which must hold data (not a `$Section` line, not the end of file).
 /// `what` streams a description of the expected data into the message; it is only called
@@ -74,124 +73,15 @@ void expect_marker(LineCursor& cursor, std::string_view marker, std::string_view
                               << in_quotes(line));
 }
 
-/// Whitespace-separated tokens of one line, parsed with std::from_chars.
-class Tokens : public detail::LineTokens {
-public:
-    using LineTokens::LineTokens;
-
-    /// A non-negative integer (tags, counts).
-    std::uint64_t next_count(std::string_view what)
-    {
-        return parse_integer<std::uint64_t>(next(what), what, "a non-negative integer");
-    }
-
-    int next_int(std::string_view what)
-    {
-        return parse_integer<int>(next(what), what, "an integer");
-    }
-
-    double next_double(std::string_view what)
-    {
-        std::string_view token = next(what);
-        const std::string_view shown = token;
-        if (token.size() > 1 && token.front() == '+' && token[1] != '-')
-            token.remove_prefix(1); // from_chars rejects the '+' that printf-style writers emit
-        double value = 0.0;
-        const auto [end, ec] = std::from_chars(token.data(), token.data() + token.size(), value);
-        CORO_CHECK(ec != std::errc::result_out_of_range, InputError,
-                   cursor().where() << ": expected " << what << ", found " << in_quotes(shown)
-                                    << " (out of the range of double)");
-        CORO_CHECK(ec == std::errc() && end == token.data() + token.size() && std::isfinite(value),
-                   InputError,
-                   cursor().where() << ": expected " << what << " (a finite number), found "
-                                    << in_quotes(shown));
-        return value;
-    }
-
-private:
-    template <class T>
-    T parse_integer(std::string_view token, std::string_view what, std::string_view kind) const
-    {
-        T value{};
-        const auto [end, ec] = std::from_chars(token.data(), token.data() + token.size(), value);
-        CORO_CHECK(ec != std::errc::result_out_of_range, InputError,
-                   cursor().where() << ": expected " << what << ", found " << in_quotes(token)
-                                    << " (too large)");
-        CORO_CHECK(ec == std::errc() && end == token.data() + token.size(), InputError,
-                   cursor().where() << ": expected " << what << " (" << kind << "), found "
-                                    << in_quotes(token));
-        return value;
-    }
-};
+using Tokens = detail::NumberTokens;
 
 enum class MshVersion { V22, V41 };
 
-/// Nodes and tets as they are read, with node tags mapped to 0-based indices in file order.
-class MshBuilder {
-public:
-    void add_node_tag(const LineCursor& cursor, std::uint64_t tag)
-    {
-        const auto index = m_node_lines.size();
-        CORO_CHECK(index < static_cast<std::size_t>(std::numeric_limits<Index>::max()), InputError,
-                   cursor.where() << ": too many nodes for a 32-bit index");
-        const auto [it, inserted] = m_index_of_tag.emplace(tag, static_cast<Index>(index));
-        CORO_CHECK(inserted, InputError,
-                   cursor.where() << ": duplicate node tag " << tag << " (first defined at line "
-                                  << m_node_lines[static_cast<std::size_t>(it->second)] << ")");
-        m_node_lines.push_back(cursor.line());
-    }
-
-    /// Appends the coordinates of the next node; `add_node_tag` must have been called first.
-    void add_node_coordinates(const std::array<double, 3>& x)
-    {
-        m_positions.insert(m_positions.end(), x.begin(), x.end());
-    }
-
-    void reserve_nodes(std::uint64_t count)
-    {
-        const auto n = static_cast<std::size_t>(std::min<std::uint64_t>(count, RESERVE_CAP));
-        m_node_lines.reserve(m_node_lines.size() + n);
-        m_positions.reserve(m_positions.size() + 3 * n);
-        m_index_of_tag.reserve(m_index_of_tag.size() + n);
-    }
-
-    void reserve_elements(std::uint64_t count)
-    {
-        const auto n = static_cast<std::size_t>(std::min<std::uint64_t>(count, RESERVE_CAP));
-        m_tets.reserve(m_tets.size() + 4 * n);
-    }
-
-    /// Appends a tet given by node tags, mapping them to indices.
-    void add_tet(const LineCursor& cursor, std::uint64_t element_tag,
-                 const std::array<std::uint64_t, 4>& node_tags)
-    {
-        CORO_CHECK(m_tets.size() / 4 < static_cast<std::size_t>(std::numeric_limits<Index>::max()),
-                   InputError, cursor.where() << ": too many tets for a 32-bit index");
-        for (const std::uint64_t tag : node_tags) {
-            const auto it = m_index_of_tag.find(tag);
-            CORO_CHECK(it != m_index_of_tag.end(), InputError,
-                       cursor.where() << ": tet element " << element_tag
-                                      << " references unknown node tag " << tag);
-            m_tets.push_back(it->second);
-        }
-    }
-
-    TetMesh finish() const
-    {
-        TetMesh mesh;
-        const auto n_nodes = static_cast<Eigen::Index>(m_node_lines.size());
-        const auto n_tets = static_cast<Eigen::Index>(m_tets.size() / 4);
-        mesh.rest_positions = Eigen::Map<const Positions>(m_positions.data(), n_nodes, 3);
-        mesh.tets = Eigen::Map<const Tets>(m_tets.data(), n_tets, 4);
-        return mesh;
-    }
-
-private:
-    std::vector<double> m_positions; // 3 per node, in file order
-    std::vector<long> m_node_lines;  // line of each node's tag, for duplicate messages
-    std::unordered_map<std::uint64_t, Index> m_index_of_tag;
-    std::vector<Index> m_tets; // 4 per tet
-};
+/// The location callable MshBuilder's checks take: the cursor's "path:line".
+auto at(const LineCursor& cursor)
+{
+    return [&cursor] { return cursor.where(); };
+}
 
 std::array<double, 3> read_xyz(Tokens& tokens)
 {
@@ -199,8 +89,15 @@ std::array<double, 3> read_xyz(Tokens& tokens)
             tokens.next_double("node z coordinate")};
 }
 
-/// Reads the line after `$MeshFormat` up to `$EndMeshFormat`.
-MshVersion read_mesh_format(LineCursor& cursor)
+/// The format line after `$MeshFormat`.
+struct MshFormat {
+    MshVersion version = MshVersion::V22;
+    bool binary = false;
+};
+
+/// Reads the line after `$MeshFormat`; for ASCII files also the `$EndMeshFormat` line (a
+/// binary file has its endianness word in between, read by the binary reader).
+MshFormat read_mesh_format(LineCursor& cursor)
 {
     const std::string_view line =
         next_data_line(cursor, [](std::ostream& os) { os << "'version file-type data-size'"; });
@@ -210,16 +107,21 @@ MshVersion read_mesh_format(LineCursor& cursor)
                cursor.where() << ": unsupported MSH version " << in_quotes(version)
                               << ", expected 2.2 or 4.1 (save from Gmsh with -format msh41 or "
                                  "msh22)");
-    const MshVersion result = version == "2.2" ? MshVersion::V22 : MshVersion::V41;
-    const int file_type = tokens.next_int("file-type (0 for ASCII)");
-    CORO_CHECK(file_type != 1, InputError,
-               cursor.where() << ": binary MSH (file-type 1) is not supported yet, expected ASCII "
-                                 "(file-type 0); save the mesh from Gmsh without -bin");
-    CORO_CHECK(file_type == 0, InputError,
-               cursor.where() << ": expected file-type 0 (ASCII), found " << file_type);
-    tokens.next_int("data-size");
+    MshFormat result;
+    result.version = version == "2.2" ? MshVersion::V22 : MshVersion::V41;
+    const int file_type = tokens.next_int("file-type (0 for ASCII, 1 for binary)");
+    CORO_CHECK(file_type == 0 || file_type == 1, InputError,
+               cursor.where() << ": expected file-type 0 (ASCII) or 1 (binary), found "
+                              << file_type);
+    result.binary = file_type == 1;
+    const int data_size = tokens.next_int("data-size");
+    CORO_CHECK(!result.binary || data_size == 8, InputError,
+               cursor.where() << ": expected data-size 8 (the size of a double and of size_t) in "
+                                 "a binary file, found "
+                              << data_size);
     tokens.expect_end("'version file-type data-size'");
-    expect_marker(cursor, "$EndMeshFormat", "the format line");
+    if (!result.binary)
+        expect_marker(cursor, "$EndMeshFormat", "the format line");
     return result;
 }
 
@@ -240,7 +142,7 @@ void read_nodes_v22(LineCursor& cursor, MshBuilder& builder)
                                             << " ('tag x y z')";
                                      }),
                       cursor);
-        builder.add_node_tag(cursor, tokens.next_count("node tag"));
+        builder.add_node_tag(at(cursor), cursor.line(), tokens.next_count("node tag"));
         builder.add_node_coordinates(read_xyz(tokens));
         tokens.expect_end("'tag x y z'");
     }
@@ -292,7 +194,7 @@ void read_nodes_v41(LineCursor& cursor, MshBuilder& builder)
                                                 << " in the block at line " << block_line;
                                          }),
                           cursor);
-            builder.add_node_tag(cursor, tokens.next_count("node tag"));
+            builder.add_node_tag(at(cursor), cursor.line(), tokens.next_count("node tag"));
             tokens.expect_end("the node tag (one per line)");
         }
         const int n_parametric = parametric == 1 ? dim : 0;
@@ -360,7 +262,7 @@ void read_elements_v22(LineCursor& cursor, MshBuilder& builder)
                                   << " values");
         for (std::uint64_t t = 0; t < n_tags; ++t)
             tokens.next("element tag");
-        builder.add_tet(cursor, tag, read_tet_nodes(tokens, cursor));
+        builder.add_tet(at(cursor), tag, read_tet_nodes(tokens, cursor));
     }
     expect_marker(cursor, "$EndElements",
                   "the " + std::to_string(count) + " elements declared at line " +
@@ -411,7 +313,7 @@ void read_elements_v41(LineCursor& cursor, MshBuilder& builder)
                 continue;
             Tokens tokens(line, cursor);
             const std::uint64_t tag = tokens.next_count("element tag");
-            builder.add_tet(cursor, tag, read_tet_nodes(tokens, cursor));
+            builder.add_tet(at(cursor), tag, read_tet_nodes(tokens, cursor));
         }
         n_read += in_block;
     }
@@ -452,9 +354,12 @@ TetMesh read_msh(const std::filesystem::path& path)
                cursor.where() << ": expected $MeshFormat on the first line of a Gmsh MSH file, "
                                  "found "
                               << in_quotes(line));
-    const MshVersion version = read_mesh_format(cursor);
+    const MshFormat format = read_mesh_format(cursor);
+    if (format.binary)
+        return detail::read_msh_binary(path.string(), text);
+    const MshVersion version = format.version;
 
-    MshBuilder builder;
+    MshBuilder builder("line");
     long nodes_line = 0;
     long elements_line = 0;
     while (cursor.next(line)) {
@@ -503,11 +408,18 @@ TetMesh read_tet_mesh(const std::filesystem::path& path)
     std::string extension = path.extension().string();
     std::transform(extension.begin(), extension.end(), extension.begin(),
                    [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-    CORO_CHECK(extension == ".msh", InputError,
-               path.string() << ": unsupported mesh extension "
-                             << (extension.empty() ? std::string("(none)") : in_quotes(extension))
-                             << ", expected one of: .msh (Gmsh 2.2 or 4.1 ASCII)");
-    return read_msh(path);
+    if (extension == ".msh")
+        return read_msh(path);
+    if (extension == ".vtu" || extension == ".vtk")
+        return read_vtk_mesh(path);
+    if (extension == ".node" || extension == ".ele")
+        return read_tetgen(path);
+    CORO_THROW(InputError, path.string() << ": unsupported mesh extension "
+                                         << (extension.empty() ? std::string("(none)")
+                                                               : in_quotes(extension))
+                                         << ", expected one of: .msh (Gmsh 2.2 or 4.1, ASCII or "
+                                            "binary), .vtu, .vtk (VTK unstructured grid), .node "
+                                            "or .ele (TetGen)");
 }
 
 void write_msh22(const std::filesystem::path& path, const TetMesh& mesh)

@@ -10,6 +10,23 @@
 #include <sstream>
 
 namespace coro {
+namespace {
+
+/// A warning when `faces` is not a closed, consistently oriented surface: contact then decides
+/// inside/outside for it by the generalized winding number alone (see ContactSurface::closed).
+void warn_if_open(const Tris& faces, const std::string& what, std::vector<std::string>& warnings)
+{
+    const SurfaceCheck check = check_surface(faces);
+    if (check.closed_and_oriented())
+        return;
+    std::ostringstream message;
+    message << what << " is not a closed, consistently oriented surface (" << check.open_edges
+            << " open, " << check.nonmanifold_edges << " non-manifold, " << check.misoriented_edges
+            << " misoriented edges); contact tests points against it by the winding number only";
+    warnings.push_back(message.str());
+}
+
+} // namespace
 
 TetMesh load_body_mesh(const BodySpec& spec, std::vector<std::string>& warnings)
 {
@@ -39,6 +56,8 @@ TetMesh load_body_mesh(const BodySpec& spec, std::vector<std::string>& warnings)
                     << " tets had negative volume and were reoriented";
             warnings.push_back(message.str());
         }
+        if (spec.shape == BodyShape::MESH && spec.surface.empty())
+            warn_if_open(boundary_faces(mesh), who + ": the boundary of mesh " + source, warnings);
     } catch (const InputError& error) {
         if (spec.shape == BodyShape::MESH)
             throw InputError(who + " (mesh " + spec.mesh.string() + "): " + error.what());
@@ -61,6 +80,10 @@ LoadedScene load_scene(const CaseSpec& spec)
                 throw InputError(body_spec.location + ": body '" + body_spec.name + "': surface " +
                                  body_spec.surface.string() + ": " + error.what());
             }
+            warn_if_open(surface.faces,
+                         body_spec.location + ": body '" + body_spec.name + "': surface " +
+                             body_spec.surface.string(),
+                         loaded.warnings);
             body_spec.transform.apply(surface.vertices);
             body.embed_surface(std::move(surface));
         }

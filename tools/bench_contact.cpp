@@ -8,6 +8,8 @@
 // same invocation; bench_embree has the Embree path on comparable frames.
 //
 //   bench_contact [--threads N] [google benchmark flags]
+//   bench_contact [--threads N] --profile exact|paper|brute [--resolution R] [--frames N] [--no-depth]
+//       a plain loop of N frames (refit + detection) for callgrind, see run_profile
 #include <corocontact/contact/detector.hpp>
 #include <corocontact/core/primitives.hpp>
 #include <corocontact/core/surface_mesh.hpp>
@@ -15,7 +17,9 @@
 #include <benchmark/benchmark.h>
 #include <tbb/global_control.h>
 
+#include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <map>
 #include <memory>
@@ -146,6 +150,64 @@ void BM_DetectBruteForce(benchmark::State& state) { detect(state, DetectionMode:
 void BM_FrameExact(benchmark::State& state) { detect(state, DetectionMode::EXACT, true); }
 void BM_FrameInsideOnlyExact(benchmark::State& state) { detect(state, DetectionMode::EXACT, true, false); }
 
+
+// --profile: a fixed number of frames in a plain loop, for valgrind --tool=callgrind
+// --toggle-collect='*profile_frames*' (instructions per frame = collected / frames; the
+// inclusive costs of profile_refit and profile_detect split them). Prints wall times too.
+struct ProfileTotals {
+    double refit_s = 0.0, detect_s = 0.0, queries = 0.0, inside = 0.0;
+};
+
+__attribute__((noinline)) void profile_refit(std::vector<ContactSurface>& surfaces, const std::vector<Positions>& nodes)
+{
+    for (std::size_t b = 0; b < surfaces.size(); ++b)
+        surfaces[b].update(nodes[b]);
+}
+
+__attribute__((noinline)) std::vector<ContactPoint> profile_detect(const std::vector<ContactSurface>& surfaces,
+                                                                   const DetectionSettings& settings,
+                                                                   DetectionStats& stats)
+{
+    return detect_contacts(surfaces, settings, &stats);
+}
+
+__attribute__((noinline)) ProfileTotals profile_frames(const Scene& s, const DetectionSettings& settings, int frames)
+{
+    using Clock = std::chrono::steady_clock;
+    std::vector<ContactSurface> surfaces = s.surfaces[0];
+    ProfileTotals totals;
+    for (int f = 0; f < frames; ++f) {
+        const auto t0 = Clock::now();
+        profile_refit(surfaces, s.frames[static_cast<std::size_t>((f + 1) % FRAMES)]);
+        const auto t1 = Clock::now();
+        DetectionStats stats;
+        const std::vector<ContactPoint> points = profile_detect(surfaces, settings, stats);
+        benchmark::DoNotOptimize(points.data());
+        const auto t2 = Clock::now();
+        totals.refit_s += std::chrono::duration<double>(t1 - t0).count();
+        totals.detect_s += std::chrono::duration<double>(t2 - t1).count();
+        totals.queries += stats.candidate_vertices;
+        totals.inside += stats.inside;
+    }
+    return totals;
+}
+
+int run_profile(Index resolution, const std::string& mode, bool depth, int frames)
+{
+    DetectionSettings settings;
+    settings.mode = mode == "paper" ? DetectionMode::PAPER
+                    : mode == "brute" ? DetectionMode::BRUTE_FORCE
+                                      : DetectionMode::EXACT;
+    settings.contact_data = depth;
+    const Scene& s = scene(resolution);
+    const ProfileTotals t = profile_frames(s, settings, frames);
+    std::printf("profile: %s mode, %s, resolution %d (%d tets in 2 spheres), %d frames\n", mode.c_str(),
+                depth ? "with depth" : "inside only", resolution, s.tets, frames);
+    std::printf("per frame: refit %.1f us, detection %.1f us, %.0f vertex queries, %.0f inside\n",
+                1e6 * t.refit_s / frames, 1e6 * t.detect_s / frames, t.queries / frames, t.inside / frames);
+    return 0;
+}
+
 } // namespace
 
 BENCHMARK(BM_Refit)->Arg(12)->Arg(26)->UseRealTime()->Unit(benchmark::kMicrosecond);
@@ -163,14 +225,37 @@ int main(int argc, char** argv)
     // --threads N (as in the corocontact command) is ours; the rest goes to Google Benchmark.
     std::unique_ptr<tbb::global_control> threads;
     std::vector<char*> args;
+    bool profile = false, depth = true;
+    Index resolution = 26;
+    int frames = FRAMES;
+    std::string mode = "exact";
     for (int i = 0; i < argc; ++i) {
         if (std::strcmp(argv[i], "--threads") == 0 && i + 1 < argc) {
             threads = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,
                                                             static_cast<std::size_t>(std::stoul(argv[++i])));
             continue;
         }
+        if (std::strcmp(argv[i], "--profile") == 0 && i + 1 < argc) {
+            profile = true;
+            mode = argv[++i];
+            continue;
+        }
+        if (std::strcmp(argv[i], "--resolution") == 0 && i + 1 < argc) {
+            resolution = static_cast<Index>(std::stoi(argv[++i]));
+            continue;
+        }
+        if (std::strcmp(argv[i], "--frames") == 0 && i + 1 < argc) {
+            frames = std::stoi(argv[++i]);
+            continue;
+        }
+        if (std::strcmp(argv[i], "--no-depth") == 0) {
+            depth = false;
+            continue;
+        }
         args.push_back(argv[i]);
     }
+    if (profile)
+        return run_profile(resolution, mode, depth, frames);
     int count = static_cast<int>(args.size());
     benchmark::Initialize(&count, args.data());
     if (benchmark::ReportUnrecognizedArguments(count, args.data()))

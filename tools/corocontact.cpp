@@ -11,6 +11,8 @@
 #include <corocontact/io/scene_loader.hpp>
 #include <corocontact/io/scene_output.hpp>
 #include <corocontact/io/vtk_series.hpp>
+#include <corocontact/sim/checkpoint.hpp>
+#include <corocontact/sim/interrupt.hpp>
 #include <corocontact/sim/scene_contact.hpp>
 #if CORO_WITH_EMBREE
 #include <corocontact/embree/embree_detector.hpp>
@@ -26,8 +28,11 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <charconv>
 #include <chrono>
+#include <csignal>
 #include <cstdio>
+#include <fstream>
 #include <iostream>
 #include <memory>
 
@@ -35,6 +40,7 @@ namespace {
 
 constexpr int EXIT_BAD_INPUT = 2;
 constexpr int EXIT_DIVERGED = 3;
+constexpr int EXIT_SIGNAL_BASE = 128; // stopped by signal s: exit 128 + s (130 SIGINT, 143 SIGTERM)
 
 double peak_rss_mb()
 {
@@ -49,7 +55,43 @@ struct RunOptions {
     int threads = 0;
     long steps = 0;
     bool quiet = false;
+    long checkpoint_every = 0;
+    std::string restart;
 };
+
+/// NAME_<step, 6 digits>.vtm, as VtkSeriesWriter names a frame.
+std::string frame_file(const std::string& name, coro::Index step)
+{
+    const std::string digits = std::to_string(step);
+    return name + "_" + std::string(digits.size() < 6 ? 6 - digits.size() : 0, '0') + digits + ".vtm";
+}
+
+// Until VtkSeriesWriter can adopt frames already on disk (it lists only the frames it wrote
+// itself), a restarted run rewrites NAME.pvd after each of its frames to list the first run's
+// frames too, in the writer's format, through a temporary file and a rename.
+void write_resumed_pvd(const coro::VtkSeriesWriter& writer, const std::string& name,
+                       const std::vector<coro::FrameRecord>& frames)
+{
+    std::string text = "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\" "
+                       "byte_order=\"LittleEndian\">\n  <Collection>\n";
+    for (const coro::FrameRecord& frame : frames) {
+        char time[64];
+        const std::to_chars_result end = std::to_chars(time, time + sizeof time, frame.time);
+        std::string escaped;
+        for (const char c : frame_file(name, frame.step))
+            escaped += c == '&' ? "&amp;" : c == '<' ? "&lt;" : c == '>' ? "&gt;" : c == '"' ? "&quot;"
+                     : c == '\'' ? "&apos;" : std::string(1, c);
+        text += "    <DataSet timestep=\"" + std::string(time, end.ptr) + "\" group=\"\" part=\"0\" file=\"" +
+                escaped + "\"/>\n";
+    }
+    text += "  </Collection>\n</VTKFile>\n";
+    coro::write_file_atomically(writer.pvd_path(), text);
+}
+
+const char* signal_name(int signal_number)
+{
+    return signal_number == SIGINT ? "SIGINT" : signal_number == SIGTERM ? "SIGTERM" : "a signal";
+}
 
 int run_case(const RunOptions& options)
 {
@@ -72,13 +114,59 @@ int run_case(const RunOptions& options)
                   << scene.bodies.size() << " bodies, " << scene.num_tets() << " tets, "
                   << scene.num_vertices() << " nodes, " << threads << " threads\n";
 
-    coro::VtkSeriesWriter writer(spec.simulation.output_dir, spec.simulation.name);
     coro::Simulation simulation(scene, spec);
+    const coro::Index last_step =
+        spec.simulation.analysis == coro::Analysis::STATIC ? spec.simulation.load_steps : spec.simulation.steps;
+    const bool checkpoints = options.checkpoint_every > 0;
+    const std::uint64_t fingerprint =
+        checkpoints || !options.restart.empty() ? coro::case_fingerprint(spec) : 0;
+    coro::RunControl control;
+    std::vector<coro::FrameRecord> frames; // written so far, the first run's included
+    if (!options.restart.empty()) {
+        std::vector<std::string> warnings;
+        coro::CheckpointState state = coro::read_checkpoint(options.restart, scene, fingerprint, warnings);
+        for (const std::string& warning : warnings)
+            std::cerr << "warning: " << warning << "\n";
+        CORO_CHECK(state.step < last_step, InputError,
+                   options.restart << ": the checkpoint is at step " << state.step << ", the case ends at step "
+                                   << last_step << " (nothing to continue; give a later --steps)");
+        control.resume_step = state.step;
+        control.resume_summary = state.summary;
+        for (const coro::FrameRecord& frame : state.frames) {
+            if (std::filesystem::exists(spec.simulation.output_dir / frame_file(spec.simulation.name, frame.step)))
+                frames.push_back(frame);
+            else
+                std::cerr << "warning: frame " << frame.step << " of the first run is not in "
+                          << spec.simulation.output_dir.string() << "; the series starts without it\n";
+        }
+        if (!options.quiet)
+            std::cerr << "continuing from step " << state.step << " (" << options.restart << ")\n";
+    }
+
+    coro::VtkSeriesWriter writer(spec.simulation.output_dir, spec.simulation.name);
+    const auto checkpoint_path = spec.simulation.output_dir / (spec.simulation.name + ".checkpoint");
+    if (checkpoints) {
+        control.checkpoint_every = static_cast<coro::Index>(options.checkpoint_every);
+        control.on_checkpoint = [&](coro::Index step, const coro::RunSummary& so_far) {
+            coro::write_checkpoint(checkpoint_path, scene, {step, so_far, frames}, fingerprint);
+        };
+    }
+    coro::install_stop_signal_handlers();
+    control.stop = &coro::stop_signal();
+
     coro::cli::Progress progress(!options.quiet, isatty(STDERR_FILENO) != 0);
+    progress.set_first(control.resume_step);
+    const bool resumed = !options.restart.empty();
     const coro::RunSummary summary = simulation.run(
-        spec.simulation.steps,
-        [&](coro::Index step, double time) { writer.write_frame(step, time, coro::scene_frame(scene)); },
-        [&](coro::Index done, coro::Index total) { progress.update(done, total); });
+        last_step,
+        [&](coro::Index step, double time) {
+            writer.write_frame(step, time, coro::scene_frame(scene));
+            frames.push_back({step, time});
+            if (resumed)
+                write_resumed_pvd(writer, spec.simulation.name, frames);
+        },
+        [&](coro::Index done, coro::Index total) { progress.update(done, total); }, control);
+    progress.finish();
 
     coro::SummaryContext context;
     context.name = spec.simulation.name;
@@ -112,6 +200,15 @@ int run_case(const RunOptions& options)
                     static_cast<int>(summary.static_not_converged));
     std::printf("  peak memory %.1f MB\n  series: %s\n  summary: %s\n", context.peak_rss_mb,
                 writer.pvd_path().string().c_str(), summary_path.string().c_str());
+    if (checkpoints)
+        std::printf("  checkpoint: %s\n", checkpoint_path.string().c_str());
+    std::fflush(stdout);
+    if (summary.stop_signal != 0) {
+        std::fprintf(stderr, "%s: interrupted by %s at step %d of %d; frames, series and summary are complete up to it\n",
+                     spec.simulation.name.c_str(), signal_name(summary.stop_signal), static_cast<int>(summary.steps),
+                     static_cast<int>(last_step));
+        return EXIT_SIGNAL_BASE + summary.stop_signal;
+    }
     return 0;
 }
 
@@ -236,6 +333,11 @@ int main(int argc, char** argv)
     run_command->add_option("--steps", run.steps, "number of time steps (overrides simulation.steps)")
         ->check(CLI::PositiveNumber);
     run_command->add_flag("--quiet", run.quiet, "no progress output");
+    run_command->add_option("--checkpoint-every", run.checkpoint_every,
+                            "save the whole state to OUT/NAME.checkpoint every N steps (and at the end)")
+        ->check(CLI::PositiveNumber);
+    run_command->add_option("--restart", run.restart,
+                            "continue the run saved in a checkpoint file of this case to its last step");
     run_command->set_version_flag("--version", std::string("corocontact ") + CORO_VERSION);
 
     DetectOptions detect;

@@ -1,9 +1,63 @@
 #!/usr/bin/env bash
 # Set up (install what is missing, build with tests), then run every test through ctest.
 #
-#   tools/test.sh [ctest options...]
+#   tools/test.sh [ctest options...]              build/       the whole suite
+#   tools/test.sh --sanitize [ctest options...]   build-asan/  the whole suite under ASan+UBSan
+#   tools/test.sh --tsan [ctest options...]       build-tsan/  the parallel tests under TSan
+#
+# --sanitize: RelWithDebInfo with CORO_SANITIZE=address,undefined (every target instrumented,
+#   UBSan reports are fatal). --tsan: RelWithDebInfo with CORO_SANITIZE=thread, running the tests
+#   that exercise TBB (partition, solver, fem, contact, sim, embree, cli, the cases), with the
+#   suppressions of tools/tsan.supp (reports entirely inside libtbb only).
+# Environment: CI=true turns warnings into errors (CORO_WARNINGS_AS_ERRORS=ON).
 set -euo pipefail
 root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
-"$root/tools/setup.sh"
-cd "$root/build"
-exec ctest --output-on-failure -j "$(nproc)" "$@"
+
+mode=default
+case "${1:-}" in
+  --sanitize) mode=asan; shift ;;
+  --tsan) mode=tsan; shift ;;
+  -h|--help) sed -n 2,12p "${BASH_SOURCE[0]}"; exit 0 ;;
+esac
+
+if [ "$mode" = default ]; then
+  "$root/tools/setup.sh"
+  cd "$root/build"
+  exec ctest --output-on-failure -j "$(nproc)" "$@"
+fi
+
+# Sanitized builds: packages as for the normal build, then a build directory of their own.
+"$root/tools/setup.sh" --no-build
+werror=OFF
+[ "${CI:-}" = "true" ] && werror=ON
+if [ "$mode" = asan ]; then
+  build="$root/build-asan"
+  sanitize="address,undefined"
+else
+  build="$root/build-tsan"
+  sanitize="thread"
+fi
+cmake -S "$root" -B "$build" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCORO_SANITIZE="$sanitize" \
+  -DCORO_BUILD_BENCHMARKS=OFF -DCORO_WARNINGS_AS_ERRORS="$werror" >/dev/null
+cmake --build "$build" -j "$(nproc)"
+cd "$build"
+
+# A UBSan report aborts the process (with -fno-sanitize-recover) and prints its stack.
+export UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1${UBSAN_OPTIONS:+:$UBSAN_OPTIONS}"
+if [ "$mode" = asan ]; then
+  export ASAN_OPTIONS="strict_string_checks=1:detect_stack_use_after_return=1:check_initialization_order=1${ASAN_OPTIONS:+:$ASAN_OPTIONS}"
+  exec ctest --output-on-failure -j "$(nproc)" "$@"
+else
+  # The tests that run TBB parallel code, by GoogleTest suite (partition, solver, fem, contact,
+  # sim, embree), the corocontact command end to end (its thread-count determinism tests) and
+  # the example cases (whole simulations on all cores).
+  tsan_tests='^(DefaultNumParts|PartLayout|PartitionTets|PartitionTetsParts|PartitionedAssembly'
+  tsan_tests+='|Axpy|BsrMatrix|Dot|PcgPreconditioners|PcgSolver'
+  tsan_tests+='|CorotationalFem|ElementStiffness|PolarRotation'
+  tsan_tests+='|AabbTree|ContactCandidates|DetectContacts|InsideTest|OverlappingPairs'
+  tsan_tests+='|Body|CantileverTipLoad|ContactResponse|ImplicitEuler|StaticSolver'
+  tsan_tests+='|CrossCheck|DetectContactsEmbree|EmbreeSceneSet'
+  tsan_tests+='|Corocontact|CorocontactDetect|CorocontactInfo|CorocontactRun)\.|^case\.'
+  export TSAN_OPTIONS="halt_on_error=1:second_deadlock_stack=1:suppressions=$root/tools/tsan.supp${TSAN_OPTIONS:+:$TSAN_OPTIONS}"
+  exec ctest --output-on-failure -j "$(nproc)" -R "$tsan_tests" "$@"
+fi

@@ -16,11 +16,6 @@ namespace coro {
 
 namespace {
 
-// Trees with fewer nodes refit serially: below this the task overhead exceeds the work.
-constexpr std::size_t PARALLEL_REFIT_NODES = 16384;
-// Nodes of one level per task in the parallel refit.
-constexpr std::size_t REFIT_GRAIN = 1024;
-
 Vec3 row(CRef<Positions> vertices, Index i) { return vertices.row(i).transpose(); }
 
 TrianglePoint closest_point_on_segment(const Vec3& p, const Vec3& a, const Vec3& b)
@@ -31,32 +26,39 @@ TrianglePoint closest_point_on_segment(const Vec3& p, const Vec3& a, const Vec3&
     return {a + s * ab, Vec3(1.0 - s, s, 0.0)};
 }
 
-/// Is triangle (A, B, C) certainly farther from `p` than √`best_d2`? Its plane's distance is a
-/// lower bound of its distance; the test allows for the rounding of every quantity with a wide
-/// margin, so it says yes only when the exact search's squared distance of the face would not be
-/// below `best_d2` either (it only saves closest_point_on_triangle calls, never changes a result).
-bool beyond_plane(const Vec3& p, const double* A, const double* B, const double* C, double best_d)
-{
-    const double e1[3] = {B[0] - A[0], B[1] - A[1], B[2] - A[2]};
-    const double e2[3] = {C[0] - A[0], C[1] - A[1], C[2] - A[2]};
-    const double q[3] = {p[0] - A[0], p[1] - A[1], p[2] - A[2]};
-    const double n[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
-    const double num = n[0] * q[0] + n[1] * q[1] + n[2] * q[2];
-    const double nn = n[0] * n[0] + n[1] * n[1] + n[2] * n[2];
-    // |error of num| ≤ a few ε · Σ|e1||e2||q| (products of the exact inputs' differences).
-    const double scale = (std::abs(e1[0]) + std::abs(e1[1]) + std::abs(e1[2])) *
-                         (std::abs(e2[0]) + std::abs(e2[1]) + std::abs(e2[2])) *
-                         (std::abs(q[0]) + std::abs(q[1]) + std::abs(q[2]));
-    const double lower = std::abs(num) - 1e-12 * scale;
-    // The computed distance of a face may err by a few ε times the coordinates' magnitude.
-    const double magnitude = std::abs(p[0]) + std::abs(p[1]) + std::abs(p[2]) + std::abs(A[0]) + std::abs(A[1]) +
-                             std::abs(A[2]) + std::abs(e1[0]) + std::abs(e1[1]) + std::abs(e1[2]) + std::abs(e2[0]) +
-                             std::abs(e2[1]) + std::abs(e2[2]);
-    const double reach = best_d * (1.0 + 1e-7) + 1e-13 * magnitude;
-    return lower > 0.0 && lower * lower > nn * (reach * reach) * (1.0 + 1e-9);
-}
-
 } // namespace
+
+void AabbTree::face_plane(const double* A, const double* B, const double* C, WideNode& w, int k)
+{
+    // In single precision: u = the normalised cross product of the edges rounded to float, the
+    // offset u·A. The slack is measured: for x = A + s·e1 + t·e2 on the face, u·(x − A) =
+    // s·(u·e1) + t·(u·e2) lies within max(|u·e1|, |u·e2|) of 0; the float evaluation of those
+    // dot products and of the offset (from float roundings of A, e1, e2: each within 2⁻²⁴ of
+    // its value) errs by less than 2⁻²¹·(|A|₁ + |e1|₁ + |e2|₁), which is added. Any error in u
+    // only widens the slack; |u| ≤ 1 + 2⁻²² (correctly rounded sqrt and division).
+    const float a[3] = {static_cast<float>(A[0]), static_cast<float>(A[1]), static_cast<float>(A[2])};
+    const float e1[3] = {static_cast<float>(B[0] - A[0]), static_cast<float>(B[1] - A[1]), static_cast<float>(B[2] - A[2])};
+    const float e2[3] = {static_cast<float>(C[0] - A[0]), static_cast<float>(C[1] - A[1]), static_cast<float>(C[2] - A[2])};
+    const float n[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
+    const float nn = n[0] * n[0] + n[1] * n[1] + n[2] * n[2];
+    if (!(nn > 1e-30f) || !(nn < 1e30f)) { // degenerate (or absurd) face: never pruned by its plane
+        w.normal[0][k] = w.normal[1][k] = w.normal[2][k] = 0.0f;
+        w.offset[k] = 0.0f;
+        w.slack[k] = std::numeric_limits<float>::infinity();
+        return;
+    }
+    const float inv = 1.0f / std::sqrt(nn);
+    const float u[3] = {n[0] * inv, n[1] * inv, n[2] * inv};
+    const float off = u[0] * a[0] + u[1] * a[1] + u[2] * a[2];
+    const float s1 = std::abs(u[0] * e1[0] + u[1] * e1[1] + u[2] * e1[2]);
+    const float s2 = std::abs(u[0] * e2[0] + u[1] * e2[1] + u[2] * e2[2]);
+    const float magnitude = std::abs(a[0]) + std::abs(a[1]) + std::abs(a[2]) + std::abs(e1[0]) + std::abs(e1[1]) +
+                            std::abs(e1[2]) + std::abs(e2[0]) + std::abs(e2[1]) + std::abs(e2[2]);
+    for (int j = 0; j < 3; ++j)
+        w.normal[j][k] = u[j];
+    w.offset[k] = off;
+    w.slack[k] = (std::max(s1, s2) + magnitude * 0x1p-20f) * (1.0f + 0x1p-20f) + 0x1p-120f;
+}
 
 TrianglePoint closest_point_on_triangle(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c)
 {
@@ -105,20 +107,82 @@ TrianglePoint closest_point_on_triangle(const Vec3& p, const Vec3& a, const Vec3
     return {a + v * ab + w * ac, Vec3(1.0 - v - w, v, w)};
 }
 
+Index AabbTree::build_node(const std::vector<Vec3>& centroids, Index begin, Index end, int depth)
+{
+    CORO_CHECK(depth < MAX_DEPTH, NumericalError, "AABB tree of " << m_faces.rows() << " faces is deeper than "
+                                                                  << MAX_DEPTH << " levels");
+    const Index node = static_cast<Index>(m_nodes.size());
+    m_nodes.emplace_back();
+    // Up to four parts, kept in range order: the largest part is split at the median of its
+    // centroids along their longest axis until there are `target` parts: every face on its own
+    // for up to four faces, else parts of at most four faces where that takes at most four
+    // parts (so the nodes above the faces are full), else four parts.
+    const Index n = end - begin;
+    const int target = n <= 4 ? static_cast<int>(n) : static_cast<int>(std::min<Index>(4, (n + 3) / 4));
+    Index bounds[5] = {begin, end, end, end, end};
+    int parts = 1;
+    while (parts < target) {
+        int largest = 0;
+        for (int k = 1; k < parts; ++k)
+            if (bounds[k + 1] - bounds[k] > bounds[largest + 1] - bounds[largest])
+                largest = k;
+        const Index b = bounds[largest], e = bounds[largest + 1];
+        if (e - b < 2)
+            break;
+        Aabb spread;
+        for (Index i = b; i < e; ++i)
+            spread.extend(centroids[static_cast<std::size_t>(m_order[static_cast<std::size_t>(i)])]);
+        int axis = 0;
+        (spread.max - spread.min).maxCoeff(&axis);
+        const Index mid = b + (e - b) / 2;
+        std::nth_element(m_order.begin() + b, m_order.begin() + mid, m_order.begin() + e, [&](Index x, Index y) {
+            const double cx = centroids[static_cast<std::size_t>(x)][axis];
+            const double cy = centroids[static_cast<std::size_t>(y)][axis];
+            return cx < cy || (cx == cy && x < y);
+        });
+        for (int k = parts; k > largest; --k)
+            bounds[k + 1] = bounds[k];
+        bounds[largest + 1] = mid;
+        ++parts;
+    }
+    WideNode& w = m_nodes[static_cast<std::size_t>(node)];
+    for (int k = 0; k < 4; ++k) {
+        for (int c = 0; c < 3; ++c) {
+            w.lo[c][k] = std::numeric_limits<float>::infinity();
+            w.hi[c][k] = -std::numeric_limits<float>::infinity();
+            w.normal[c][k] = 0.0f;
+        }
+        w.offset[k] = 0.0f;
+        w.slack[k] = std::numeric_limits<float>::infinity();
+    }
+    w.count = parts;
+    w.face_mask = 0;
+    for (int k = 0; k < 4; ++k)
+        w.child[k] = -1;
+    for (int k = 0; k < parts; ++k) {
+        const Index b = bounds[k], e = bounds[k + 1];
+        const Index child = e - b == 1 ? -1 - b : build_node(centroids, b, e, depth + 1);
+        m_nodes[static_cast<std::size_t>(node)].child[k] = child;
+        if (child < 0)
+            m_nodes[static_cast<std::size_t>(node)].face_mask |= 1 << k;
+    }
+    return node;
+}
+
 void AabbTree::build(CRef<Positions> vertices, const Tris& faces)
 {
     m_faces = faces;
     m_nodes.clear();
+    m_node_boxes.clear();
+    m_subtree_end.clear();
+    m_task_roots.clear();
     m_order.resize(static_cast<std::size_t>(faces.rows()));
     std::iota(m_order.begin(), m_order.end(), Index{0});
-    m_levels.clear();
-    m_level_offsets.clear();
     m_vertex_order.clear();
     m_vertex_blocks.clear();
     m_face_boxes.clear();
-    m_packed.clear();
-    m_packed_of.clear();
-    m_packed_faces.clear();
+    m_slot_vertices.clear();
+    m_bounds = Aabb{};
     if (faces.rows() == 0)
         return;
     for (Index f = 0; f < faces.rows(); ++f)
@@ -131,63 +195,29 @@ void AabbTree::build(CRef<Positions> vertices, const Tris& faces)
     for (Index f = 0; f < faces.rows(); ++f)
         centroids[static_cast<std::size_t>(f)] =
             (row(vertices, faces(f, 0)) + row(vertices, faces(f, 1)) + row(vertices, faces(f, 2))) / 3.0;
+    m_nodes.reserve(static_cast<std::size_t>(faces.rows()) / 2 + 1);
+    build_node(centroids, 0, static_cast<Index>(faces.rows()), 0);
+    m_node_boxes.resize(m_nodes.size());
 
-    // Nodes are numbered in creation order: children always after their parent.
-    m_nodes.reserve(2 * static_cast<std::size_t>(faces.rows()) / MAX_LEAF_FACES + 1);
-    struct Task {
-        Index node, begin, end;
-    };
-    std::vector<Task> stack{{0, 0, static_cast<Index>(faces.rows())}};
-    m_nodes.emplace_back();
-    while (!stack.empty()) {
-        const Task task = stack.back();
-        stack.pop_back();
-        Node& node = m_nodes[static_cast<std::size_t>(task.node)];
-        node.begin = task.begin;
-        node.end = task.end;
-        if (task.end - task.begin <= MAX_LEAF_FACES)
-            continue;
-        Aabb spread;
-        for (Index i = task.begin; i < task.end; ++i)
-            spread.extend(centroids[static_cast<std::size_t>(m_order[static_cast<std::size_t>(i)])]);
-        int axis = 0;
-        (spread.max - spread.min).maxCoeff(&axis);
-        const Index mid = task.begin + (task.end - task.begin) / 2;
-        std::nth_element(m_order.begin() + task.begin, m_order.begin() + mid, m_order.begin() + task.end,
-                         [&](Index a, Index b) {
-                             const double ca = centroids[static_cast<std::size_t>(a)][axis];
-                             const double cb = centroids[static_cast<std::size_t>(b)][axis];
-                             return ca < cb || (ca == cb && a < b);
-                         });
-        const Index left = static_cast<Index>(m_nodes.size());
-        m_nodes.emplace_back();
-        const Index right = static_cast<Index>(m_nodes.size());
-        m_nodes.emplace_back();
-        m_nodes[static_cast<std::size_t>(task.node)].left = left;
-        m_nodes[static_cast<std::size_t>(task.node)].right = right;
-        // Right first on the stack so that the left subtree is laid out first.
-        stack.push_back({right, mid, task.end});
-        stack.push_back({left, task.begin, mid});
-    }
-    // Heights for the level-by-level parallel refit.
-    std::vector<Index> height(m_nodes.size(), 0);
+    // Subtree extents (children follow their parent, each subtree contiguous) and, for the
+    // parallel refit, the roots of the subtrees two levels below the root.
+    m_subtree_end.assign(m_nodes.size(), 0);
     for (std::size_t n = m_nodes.size(); n-- > 0;) {
-        const Node& node = m_nodes[n];
-        if (node.left >= 0)
-            height[n] = 1 + std::max(height[static_cast<std::size_t>(node.left)],
-                                     height[static_cast<std::size_t>(node.right)]);
+        Index end = static_cast<Index>(n) + 1;
+        const WideNode& w = m_nodes[n];
+        for (int k = 0; k < w.count; ++k)
+            if (w.child[k] >= 0)
+                end = std::max(end, m_subtree_end[static_cast<std::size_t>(w.child[k])]);
+        m_subtree_end[n] = end;
     }
-    const Index levels = height[0] + 1;
-    CORO_CHECK(levels < 90, NumericalError, "AABB tree of " << faces.rows() << " faces is " << levels
-                                                            << " levels deep");
-    m_level_offsets.assign(static_cast<std::size_t>(levels) + 1, 0);
-    for (const Index h : height)
-        ++m_level_offsets[static_cast<std::size_t>(h) + 1];
-    std::partial_sum(m_level_offsets.begin(), m_level_offsets.end(), m_level_offsets.begin());
-    m_levels.resize(m_nodes.size());
-    std::vector<Index> fill(m_level_offsets.begin(), m_level_offsets.end() - 1);
-    for (std::size_t n = 0; n < m_nodes.size(); ++n)
-        m_levels[static_cast<std::size_t>(fill[static_cast<std::size_t>(height[n])]++)] = static_cast<Index>(n);
+    for (int k = 0; k < m_nodes[0].count; ++k) {
+        const Index c = m_nodes[0].child[k];
+        if (c < 0)
+            continue;
+        for (int j = 0; j < m_nodes[static_cast<std::size_t>(c)].count; ++j)
+            if (m_nodes[static_cast<std::size_t>(c)].child[j] >= 0)
+                m_task_roots.push_back(m_nodes[static_cast<std::size_t>(c)].child[j]);
+    }
 
     // Vertices in order of first appearance in the leaves: spatially coherent.
     std::vector<char> seen(static_cast<std::size_t>(vertices.rows()), 0);
@@ -201,142 +231,145 @@ void AabbTree::build(CRef<Positions> vertices, const Tris& faces)
         }
     m_vertex_blocks.resize((m_vertex_order.size() + VERTEX_BLOCK - 1) / VERTEX_BLOCK);
     m_face_boxes.resize(m_order.size());
-    m_packed_faces.resize(m_order.size());
-
-    // Single precision traversal copy: root at 0, then sibling pairs in depth-first order from
-    // slot 2 on (slot 1 stays unused so that every pair starts at an even slot: one cache line).
-    m_packed.assign(m_nodes.size() + 1, PackedNode{{0, 0, 0}, {0, 0, 0}, 0, 0});
-    m_packed_of.assign(m_nodes.size(), -1);
-    m_packed_of[0] = 0;
-    Index next = 2;
-    std::vector<Index> dfs{0};
-    while (!dfs.empty()) {
-        const Index n = dfs.back();
-        dfs.pop_back();
-        const Node& node = m_nodes[static_cast<std::size_t>(n)];
-        PackedNode& packed = m_packed[static_cast<std::size_t>(m_packed_of[static_cast<std::size_t>(n)])];
-        if (node.left < 0) {
-            packed.link = node.begin;
-            packed.count = node.end - node.begin;
-            continue;
-        }
-        CORO_ASSERT(node.right == node.left + 1);
-        packed.link = next;
-        packed.count = 0;
-        m_packed_of[static_cast<std::size_t>(node.left)] = next;
-        m_packed_of[static_cast<std::size_t>(node.right)] = next + 1;
-        next += 2;
-        dfs.push_back(node.right);
-        dfs.push_back(node.left);
-    }
-    CORO_ASSERT(static_cast<std::size_t>(next) == m_packed.size());
+    m_slot_vertices.resize(3 * m_order.size());
+    for (std::size_t i = 0; i < m_order.size(); ++i)
+        for (int c = 0; c < 3; ++c)
+            m_slot_vertices[3 * i + static_cast<std::size_t>(c)] = faces(m_order[i], c);
     refit(vertices);
 }
 
-void AabbTree::pack(const Aabb& box, float* min, float* max)
+void AabbTree::refit_node(const double* data, std::ptrdiff_t stride, Index n)
 {
-    // Round to nearest, then step outward when that went inward: x ∓ |x|·2⁻²² lies more than
-    // half a float ulp beyond x, so its nearest float does too (no libm nextafter in the loop).
-    for (int k = 0; k < 3; ++k) {
-        const double lo = box.min[k], hi = box.max[k];
-        float flo = static_cast<float>(lo), fhi = static_cast<float>(hi);
-        if (static_cast<double>(flo) > lo)
-            flo = static_cast<float>(lo - std::abs(lo) * 0x1p-22 - 0x1p-140);
-        if (static_cast<double>(fhi) < hi)
-            fhi = static_cast<float>(hi + std::abs(hi) * 0x1p-22 + 0x1p-140);
-        min[k] = flo;
-        max[k] = fhi;
+    WideNode& w = m_nodes[static_cast<std::size_t>(n)];
+    // SSE2: (x, y) in one register, z in the low half of another.
+    __m128d lo_xy = _mm_set1_pd(std::numeric_limits<double>::infinity()), lo_z = lo_xy;
+    __m128d hi_xy = _mm_set1_pd(-std::numeric_limits<double>::infinity()), hi_z = hi_xy;
+    const __m128 abs_mask = _mm_castsi128_ps(_mm_set1_epi32(0x7fffffff));
+    const __m128 ulp = _mm_set1_ps(0x1p-23f), tiny = _mm_set1_ps(0x1p-126f);
+    alignas(16) float flo[4], fhi[4];
+    for (int k = 0; k < w.count; ++k) {
+        const Index c = w.child[k];
+        __m128d bl_xy, bl_z, bh_xy, bh_z;
+        if (c < 0) {
+            const std::size_t slot = static_cast<std::size_t>(-1 - c);
+            const Index* fv = &m_slot_vertices[3 * slot];
+            const double* a = data + stride * fv[0];
+            const double* b = data + stride * fv[1];
+            const double* d = data + stride * fv[2];
+            const __m128d a_xy = _mm_loadu_pd(a), b_xy = _mm_loadu_pd(b), d_xy = _mm_loadu_pd(d);
+            const __m128d a_z = _mm_load_sd(a + 2), b_z = _mm_load_sd(b + 2), d_z = _mm_load_sd(d + 2);
+            bl_xy = _mm_min_pd(_mm_min_pd(a_xy, b_xy), d_xy);
+            bh_xy = _mm_max_pd(_mm_max_pd(a_xy, b_xy), d_xy);
+            bl_z = _mm_min_sd(_mm_min_sd(a_z, b_z), d_z);
+            bh_z = _mm_max_sd(_mm_max_sd(a_z, b_z), d_z);
+            Aabb& fb = m_face_boxes[slot];
+            _mm_storeu_pd(fb.min.data(), bl_xy);
+            _mm_store_sd(fb.min.data() + 2, bl_z);
+            _mm_storeu_pd(fb.max.data(), bh_xy);
+            _mm_store_sd(fb.max.data() + 2, bh_z);
+            face_plane(a, b, d, w, k);
+        } else {
+            const Aabb& cb = m_node_boxes[static_cast<std::size_t>(c)];
+            bl_xy = _mm_loadu_pd(cb.min.data());
+            bl_z = _mm_load_sd(cb.min.data() + 2);
+            bh_xy = _mm_loadu_pd(cb.max.data());
+            bh_z = _mm_load_sd(cb.max.data() + 2);
+        }
+        lo_xy = _mm_min_pd(lo_xy, bl_xy);
+        lo_z = _mm_min_sd(lo_z, bl_z);
+        hi_xy = _mm_max_pd(hi_xy, bh_xy);
+        hi_z = _mm_max_sd(hi_z, bh_z);
+        // Outward float rounding (detail::float_down / float_up, three lanes at once).
+        const __m128 l = _mm_movelh_ps(_mm_cvtpd_ps(bl_xy), _mm_cvtpd_ps(bl_z));
+        const __m128 h = _mm_movelh_ps(_mm_cvtpd_ps(bh_xy), _mm_cvtpd_ps(bh_z));
+        _mm_store_ps(flo, _mm_sub_ps(l, _mm_add_ps(_mm_mul_ps(_mm_and_ps(l, abs_mask), ulp), tiny)));
+        _mm_store_ps(fhi, _mm_add_ps(h, _mm_add_ps(_mm_mul_ps(_mm_and_ps(h, abs_mask), ulp), tiny)));
+        for (int j = 0; j < 3; ++j) {
+            w.lo[j][k] = flo[j];
+            w.hi[j][k] = fhi[j];
+        }
     }
+    Aabb& nb = m_node_boxes[static_cast<std::size_t>(n)];
+    _mm_storeu_pd(nb.min.data(), lo_xy);
+    _mm_store_sd(nb.min.data() + 2, lo_z);
+    _mm_storeu_pd(nb.max.data(), hi_xy);
+    _mm_store_sd(nb.max.data() + 2, hi_z);
 }
 
-void AabbTree::refit_node(CRef<Positions> vertices, Index n)
+void AabbTree::refit_range(const double* data, std::ptrdiff_t stride, Index first, Index last)
 {
-    Node& node = m_nodes[static_cast<std::size_t>(n)];
-    PackedNode& packed = m_packed[static_cast<std::size_t>(m_packed_of[static_cast<std::size_t>(n)])];
-    if (node.left >= 0) {
-        node.box = m_nodes[static_cast<std::size_t>(node.left)].box;
-        node.box.extend(m_nodes[static_cast<std::size_t>(node.right)].box);
-        pack(node.box, packed.min, packed.max);
-        return;
-    }
-    Aabb box;
-    const double* data = vertices.data();
-    const auto stride = vertices.outerStride();
-    for (Index i = node.begin; i < node.end; ++i) {
-        const Index f = m_order[static_cast<std::size_t>(i)];
-        const double* a = data + stride * m_faces(f, 0);
-        const double* b = data + stride * m_faces(f, 1);
-        const double* c = data + stride * m_faces(f, 2);
-        Aabb& face_box = m_face_boxes[static_cast<std::size_t>(i)];
-        for (int k = 0; k < 3; ++k) {
-            face_box.min[k] = std::min(std::min(a[k], b[k]), c[k]);
-            face_box.max[k] = std::max(std::max(a[k], b[k]), c[k]);
-        }
-        box.extend(face_box);
-        pack(face_box, m_packed_faces[static_cast<std::size_t>(i)].min, m_packed_faces[static_cast<std::size_t>(i)].max);
-    }
-    node.box = box;
-    pack(box, packed.min, packed.max);
+    for (Index n = last; n-- > first;)
+        refit_node(data, stride, n);
 }
 
 void AabbTree::refit(CRef<Positions> vertices)
 {
     if (m_nodes.empty())
         return;
-    if (m_nodes.size() < PARALLEL_REFIT_NODES) {
-        for (std::size_t n = m_nodes.size(); n-- > 0;)
-            refit_node(vertices, static_cast<Index>(n));
+    const double* data = vertices.data();
+    const std::ptrdiff_t stride = vertices.outerStride();
+    // Large trees: the subtrees two levels down as tasks, then the few nodes above them.
+    constexpr Index PARALLEL_REFIT_FACES = 4096;
+    if (num_faces() < PARALLEL_REFIT_FACES || m_task_roots.size() < 2) {
+        refit_range(data, stride, 0, static_cast<Index>(m_nodes.size()));
     } else {
-        for (std::size_t level = 0; level + 1 < m_level_offsets.size(); ++level) {
-            const auto begin = static_cast<std::size_t>(m_level_offsets[level]);
-            const auto end = static_cast<std::size_t>(m_level_offsets[level + 1]);
-            if (end - begin < 2 * REFIT_GRAIN) {
-                for (std::size_t i = begin; i < end; ++i)
-                    refit_node(vertices, m_levels[i]);
-                continue;
-            }
-            tbb::parallel_for(tbb::blocked_range<std::size_t>(begin, end, REFIT_GRAIN),
-                              [&](const tbb::blocked_range<std::size_t>& r) {
-                                  for (std::size_t i = r.begin(); i < r.end(); ++i)
-                                      refit_node(vertices, m_levels[i]);
-                              });
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, m_task_roots.size(), 1),
+                          [&](const tbb::blocked_range<std::size_t>& r) {
+                              for (std::size_t i = r.begin(); i < r.end(); ++i) {
+                                  const Index root = m_task_roots[i];
+                                  refit_range(data, stride, root, m_subtree_end[static_cast<std::size_t>(root)]);
+                              }
+                          });
+        // The root and its children: every node before the first task root and the root's node
+        // children (each precedes its own subtree, and the task roots lie inside those).
+        for (Index n = m_task_roots.front(); n-- > 0;)
+            refit_node(data, stride, n);
+        for (int k = m_nodes[0].count; k-- > 0;) {
+            const Index c = m_nodes[0].child[k];
+            if (c > 0 && c >= m_task_roots.front())
+                refit_node(data, stride, c);
         }
+        refit_node(data, stride, 0);
     }
+    m_bounds = m_node_boxes[0];
     for (std::size_t b = 0; b < m_vertex_blocks.size(); ++b) {
-        Aabb box;
+        double lo[3] = {std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity(),
+                        std::numeric_limits<double>::infinity()};
+        double hi[3] = {-lo[0], -lo[1], -lo[2]};
         const std::size_t end = std::min(m_vertex_order.size(), (b + 1) * VERTEX_BLOCK);
-        for (std::size_t i = b * VERTEX_BLOCK; i < end; ++i)
-            box.extend(row(vertices, m_vertex_order[i]));
-        m_vertex_blocks[b] = box;
+        for (std::size_t i = b * VERTEX_BLOCK; i < end; ++i) {
+            const double* x = data + stride * m_vertex_order[i];
+            for (int j = 0; j < 3; ++j) {
+                lo[j] = std::min(lo[j], x[j]);
+                hi[j] = std::max(hi[j], x[j]);
+            }
+        }
+        m_vertex_blocks[b].min = Vec3(lo[0], lo[1], lo[2]);
+        m_vertex_blocks[b].max = Vec3(hi[0], hi[1], hi[2]);
     }
 }
 
-const Aabb& AabbTree::bounds() const
-{
-    static const Aabb empty;
-    return m_nodes.empty() ? empty : m_nodes.front().box;
-}
+const Aabb& AabbTree::bounds() const { return m_bounds; }
 
 void AabbTree::faces_overlapping(const Aabb& box, std::vector<Index>& out) const
 {
     out.clear();
-    if (m_nodes.empty() || box.empty())
+    if (m_nodes.empty() || box.empty() || !m_bounds.overlaps(box))
         return;
-    Index stack[96];
+    Index stack[STACK_SIZE];
     int top = 0;
     stack[top++] = 0;
     while (top > 0) {
-        const Node& node = m_nodes[static_cast<std::size_t>(stack[--top])];
-        if (!node.box.overlaps(box))
-            continue;
-        if (node.left >= 0) {
-            stack[top++] = node.right;
-            stack[top++] = node.left;
-            continue;
+        const WideNode& node = m_nodes[static_cast<std::size_t>(stack[--top])];
+        for (int k = 0; k < node.count; ++k) {
+            const Index c = node.child[k];
+            if (c >= 0) {
+                if (m_node_boxes[static_cast<std::size_t>(c)].overlaps(box))
+                    stack[top++] = c;
+            } else if (m_face_boxes[static_cast<std::size_t>(-1 - c)].overlaps(box)) {
+                out.push_back(m_order[static_cast<std::size_t>(-1 - c)]);
+            }
         }
-        for (Index i = node.begin; i < node.end; ++i)
-            if (m_face_boxes[static_cast<std::size_t>(i)].overlaps(box))
-                out.push_back(m_order[static_cast<std::size_t>(i)]);
     }
     std::sort(out.begin(), out.end());
 }
@@ -367,13 +400,13 @@ AabbTree::Nearest AabbTree::nearest(CRef<Positions> vertices, const Vec3& point,
                                     Index hint_face) const
 {
     Nearest best;
-    if (m_packed.empty())
+    if (m_nodes.empty())
         return best;
-    // Initial bound on the squared distance, strictly above the nearest face's computed squared
-    // distance: boxes and faces at or beyond it cannot hold the answer, everything below it is
-    // visited exactly as in an unbounded search (pruning only skips, never reorders), so the same
-    // face wins, ties included. The hint face's distance is computed with the same formula as in
-    // the search; the inflation covers the rounding of the squared distances.
+    // Initial bound on the squared distance, at or above the nearest face's computed squared
+    // distance: boxes strictly beyond it cannot hold the answer. Of faces with the same computed
+    // squared distance the smallest index wins, so neither the bound nor the traversal order can
+    // change the answer. The hint face's distance is computed with the same formula as in the
+    // search; the inflation covers the rounding of the squared distances.
     double bound_d2 = std::numeric_limits<double>::infinity();
     if (distance_bound < std::numeric_limits<double>::infinity())
         bound_d2 = distance_bound * distance_bound * (1.0 + 1e-6) + std::numeric_limits<double>::min();
@@ -384,68 +417,100 @@ AabbTree::Nearest AabbTree::nearest(CRef<Positions> vertices, const Vec3& point,
         bound_d2 = std::min(bound_d2, (q.point - point).squaredNorm() * (1.0 + 1e-6) +
                                           std::numeric_limits<double>::min());
     }
-    // Squared distance of `point` to a float box, as Σ_k max(lo_k − p_k, p_k − hi_k, 0)² in
-    // double, k = 0, 1, 2 in this order; x and y in one SSE2 register (the same operations on
-    // each component, so the same values as the scalar loop).
-    const __m128d pxy = _mm_loadu_pd(point.data());
-    const double pz = point[2];
-    const __m128d zero = _mm_setzero_pd();
-    const auto d2 = [&](const float* lo, const float* hi) {
-        const __m128d lxy = _mm_cvtps_pd(_mm_castsi128_ps(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(lo))));
-        const __m128d hxy = _mm_cvtps_pd(_mm_castsi128_ps(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(hi))));
-        const __m128d dxy = _mm_max_pd(_mm_max_pd(_mm_sub_pd(lxy, pxy), _mm_sub_pd(pxy, hxy)), zero);
-        const __m128d sxy = _mm_mul_pd(dxy, dxy);
-        const double dz = std::max(std::max(static_cast<double>(lo[2]) - pz, pz - static_cast<double>(hi[2])), 0.0);
-        return (_mm_cvtsd_f64(sxy) + _mm_cvtsd_f64(_mm_unpackhi_pd(sxy, sxy))) + dz * dz;
-    };
+    // Squared distances of the point to four single precision boxes at once. The point is
+    // widened to a float interval [p_lo, p_hi] containing it, so the float result is at most the
+    // exact squared distance times (1 + 2⁻²¹); a box is skipped only when that is above the
+    // threshold, float_threshold(best_d2) ≥ best_d2·(1 + 2⁻¹⁹): it then lies strictly farther
+    // than the best face, ties included.
+    const __m128 p_lo[3] = {_mm_set1_ps(detail::float_down(point[0])), _mm_set1_ps(detail::float_down(point[1])),
+                            _mm_set1_ps(detail::float_down(point[2]))};
+    const __m128 p_hi[3] = {_mm_set1_ps(detail::float_up(point[0])), _mm_set1_ps(detail::float_up(point[1])),
+                            _mm_set1_ps(detail::float_up(point[2]))};
+    const __m128 zero = _mm_setzero_ps();
+    const __m128 p_f[3] = {_mm_set1_ps(static_cast<float>(point[0])), _mm_set1_ps(static_cast<float>(point[1])),
+                           _mm_set1_ps(static_cast<float>(point[2]))};
+    const __m128 p_error = _mm_set1_ps(
+        static_cast<float>((std::abs(point[0]) + std::abs(point[1]) + std::abs(point[2])) * 0x1p-20) + 0x1p-120f);
     double best_d2 = bound_d2;
-    double best_d = std::sqrt(bound_d2);
+    float threshold = detail::float_threshold(best_d2);
     const double* data = vertices.data();
     const auto stride = vertices.outerStride();
-    Index stack[96];
-    double stack_d2[96];
+    Index stack[STACK_SIZE];
+    float stack_d2[STACK_SIZE];
     int top = 0;
     stack[top] = 0;
-    stack_d2[top++] = 0.0;
+    stack_d2[top++] = 0.0f;
+    alignas(16) float d2[4];
     while (top > 0) {
         --top;
-        if (stack_d2[top] >= best_d2)
+        if (stack_d2[top] > threshold)
             continue;
-        const PackedNode& node = m_packed[static_cast<std::size_t>(stack[top])];
-        if (node.count > 0) {
-            for (Index i = node.link; i < node.link + node.count; ++i) {
-                const PackedBox& pb = m_packed_faces[static_cast<std::size_t>(i)];
-                if (d2(pb.min, pb.max) >= best_d2)
-                    continue;
-                const Index f = m_order[static_cast<std::size_t>(i)];
-                const double* A = data + stride * m_faces(f, 0);
-                const double* B = data + stride * m_faces(f, 1);
-                const double* C = data + stride * m_faces(f, 2);
-                if (beyond_plane(point, A, B, C, best_d))
-                    continue;
-                const TrianglePoint q =
-                    closest_point_on_triangle(point, Vec3(A[0], A[1], A[2]), Vec3(B[0], B[1], B[2]), Vec3(C[0], C[1], C[2]));
-                const double dq = (q.point - point).squaredNorm();
-                if (dq < best_d2) {
-                    best_d2 = dq;
-                    best_d = std::sqrt(dq);
-                    best.face = f;
-                    best.point = q.point;
-                    best.barycentric = q.barycentric;
-                }
-            }
-            continue;
+        const WideNode& node = m_nodes[static_cast<std::size_t>(stack[top])];
+        __m128 sum = zero;
+        for (int j = 0; j < 3; ++j) {
+            const __m128 d = _mm_max_ps(_mm_max_ps(_mm_sub_ps(_mm_load_ps(node.lo[j]), p_hi[j]),
+                                                   _mm_sub_ps(p_lo[j], _mm_load_ps(node.hi[j]))),
+                                        zero);
+            sum = _mm_add_ps(sum, _mm_mul_ps(d, d));
         }
-        const PackedNode& l = m_packed[static_cast<std::size_t>(node.link)];
-        const PackedNode& r = m_packed[static_cast<std::size_t>(node.link) + 1];
-        const double dl = d2(l.min, l.max), dr = d2(r.min, r.max);
-        const bool left_near = dl <= dr;
-        stack[top] = left_near ? node.link + 1 : node.link;
-        stack_d2[top] = left_near ? dr : dl;
-        top += (left_near ? dr : dl) < best_d2;
-        stack[top] = left_near ? node.link : node.link + 1;
-        stack_d2[top] = left_near ? dl : dr;
-        top += (left_near ? dl : dr) < best_d2;
+        int mask = _mm_movemask_ps(_mm_cmple_ps(sum, _mm_set1_ps(threshold))) & ((1 << node.count) - 1);
+        if (mask == 0)
+            continue;
+        _mm_store_ps(d2, sum);
+        int order[4];
+        int n = 0;
+        for (int k = 0; k < 4; ++k)
+            if (mask & (1 << k)) {
+                int j = n++;
+                while (j > 0 && d2[order[j - 1]] > d2[k]) {
+                    order[j] = order[j - 1];
+                    --j;
+                }
+                order[j] = k;
+            }
+        // Faces first, nearer first; then the child nodes, the nearest on top of the stack.
+        // A face whose plane slab lies beyond the threshold is skipped: |u·p − offset| is
+        // computed in float from p's rounding; the error of that (a few float ulps of
+        // |p|₁ + |offset|, taken 8 times over) is subtracted before the comparison.
+        if (mask & node.face_mask) {
+            __m128 dot = _mm_sub_ps(_mm_mul_ps(_mm_load_ps(node.normal[0]), p_f[0]), _mm_load_ps(node.offset));
+            dot = _mm_add_ps(dot, _mm_mul_ps(_mm_load_ps(node.normal[1]), p_f[1]));
+            dot = _mm_add_ps(dot, _mm_mul_ps(_mm_load_ps(node.normal[2]), p_f[2]));
+            const __m128 abs_mask = _mm_castsi128_ps(_mm_set1_epi32(0x7fffffff));
+            const __m128 error = _mm_add_ps(p_error, _mm_mul_ps(_mm_and_ps(_mm_load_ps(node.offset), abs_mask),
+                                                                _mm_set1_ps(0x1p-20f)));
+            const __m128 lower = _mm_sub_ps(_mm_sub_ps(_mm_and_ps(dot, abs_mask), _mm_load_ps(node.slack)), error);
+            // (1 − 2⁻¹⁸)·lower ≤ the distance (|u| ≤ 1 + 2⁻²²); skipped when its square is above
+            // the threshold.
+            const __m128 scaled = _mm_mul_ps(_mm_max_ps(lower, zero), _mm_set1_ps(1.0f - 0x1p-18f));
+            mask &= ~_mm_movemask_ps(_mm_cmpgt_ps(_mm_mul_ps(scaled, scaled), _mm_set1_ps(threshold)));
+        }
+        for (int i = 0; i < n; ++i) {
+            const Index c = node.child[order[i]];
+            if (c >= 0 || d2[order[i]] > threshold || !(mask & (1 << order[i])))
+                continue;
+            const Index f = m_order[static_cast<std::size_t>(-1 - c)];
+            const double* A = data + stride * m_faces(f, 0);
+            const double* B = data + stride * m_faces(f, 1);
+            const double* C = data + stride * m_faces(f, 2);
+            const TrianglePoint q =
+                closest_point_on_triangle(point, Vec3(A[0], A[1], A[2]), Vec3(B[0], B[1], B[2]), Vec3(C[0], C[1], C[2]));
+            const double dq = (q.point - point).squaredNorm();
+            if (dq < best_d2 || (dq == best_d2 && f < best.face)) {
+                best_d2 = dq;
+                threshold = detail::float_threshold(best_d2);
+                best.face = f;
+                best.point = q.point;
+                best.barycentric = q.barycentric;
+            }
+        }
+        for (int i = n; i-- > 0;) {
+            const Index c = node.child[order[i]];
+            if (c < 0)
+                continue;
+            stack[top] = c;
+            stack_d2[top++] = d2[order[i]];
+        }
     }
     if (best.face < 0) // a bound below the true distance (an invalid hint): search again without it
         return bound_d2 < std::numeric_limits<double>::infinity()

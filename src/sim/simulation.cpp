@@ -3,6 +3,7 @@
 #include <corocontact/config.hpp>
 #include <corocontact/core/error.hpp>
 #include <corocontact/sim/contact_step.hpp>
+#include <corocontact/sim/divergence_check.hpp>
 #include <corocontact/sim/integrator.hpp>
 #include <corocontact/sim/scene_contact.hpp>
 #include <corocontact/sim/static_solver.hpp>
@@ -12,8 +13,8 @@
 #endif
 
 #include <algorithm>
-#include <tuple>
 #include <chrono>
+#include <tuple>
 #include <string>
 
 namespace coro {
@@ -54,7 +55,8 @@ struct Simulation::EmbreeCheck {
 struct Simulation::EmbreeCheck {};
 #endif
 
-Simulation::Simulation(Scene& scene, const CaseSpec& spec) : m_scene(scene), m_spec(spec)
+Simulation::Simulation(Scene& scene, const CaseSpec& spec)
+    : m_scene(scene), m_spec(spec), m_divergence(scene.bodies)
 {
     if (!spec.contact.enabled)
         return;
@@ -141,7 +143,8 @@ void Simulation::static_step(Index load_step, RunSummary& summary)
     }
 }
 
-RunSummary Simulation::run(Index steps, const FrameCallback& on_frame, const ProgressCallback& on_progress)
+RunSummary Simulation::run(Index steps, const FrameCallback& on_frame, const ProgressCallback& on_progress,
+                           const RunControl& control)
 {
     const bool is_static = m_spec.simulation.analysis == Analysis::STATIC;
     const Index total = is_static ? m_spec.simulation.load_steps : steps;
@@ -149,35 +152,68 @@ RunSummary Simulation::run(Index steps, const FrameCallback& on_frame, const Pro
     const auto time_of = [&](Index step) {
         return is_static ? static_cast<double>(step) / total : step * m_spec.simulation.dt;
     };
+    const Index first = control.resume_step;
+    CORO_CHECK(first == 0 || first < total, InputError,
+               "the run to continue is at step " << first << ", but the case ends at step " << total
+                                                 << " (expected a later last step; see --steps)");
 
-    RunSummary summary;
+    RunSummary summary = first > 0 ? control.resume_summary : RunSummary{};
+    summary.first_step = first;
+    summary.stop_signal = 0;
+    const double wall_before = first > 0 ? summary.wall_s : 0.0;
     const auto start = std::chrono::steady_clock::now();
+    const auto update_wall = [&] {
+        summary.wall_s = wall_before + std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    };
     const auto write_frame = [&](Index step) {
         if (!on_frame)
             return;
         ScopedTimer timer(summary.phases.output);
         on_frame(step, time_of(step));
     };
+    const auto checkpoint = [&](Index step) {
+        if (control.checkpoint_every <= 0 || !control.on_checkpoint)
+            return;
+        update_wall();
+        control.on_checkpoint(step, summary);
+    };
+    const auto stop_requested = [&] { return control.stop != nullptr && control.stop->load() != 0; };
 
-    detect(summary);
-    write_frame(0);
-    for (Index step = 1; step <= total; ++step) {
+    if (first > 0) {
+        // The contact response of the saved state; its counters were taken when it was saved.
+        RunSummary scratch;
+        detect(scratch);
+    } else {
+        detect(summary);
+        write_frame(0);
+    }
+    Index step = first;
+    if (stop_requested())
+        summary.stop_signal = control.stop->load();
+    while (summary.stop_signal == 0 && step < total) {
+        ++step;
         try {
             if (is_static)
                 static_step(step, summary);
             else
                 dynamic_step(summary);
+            m_divergence.check(m_scene.bodies);
             detect(summary);
         } catch (const NumericalError& error) {
             CORO_THROW(NumericalError, "step " << step << " (t = " << time_of(step) << "): " << error.what());
         }
         summary.steps = step;
-        if (step % every == 0 || step == total)
+        if (stop_requested())
+            summary.stop_signal = control.stop->load();
+        const bool frame_due = step % every == 0 || step == total;
+        if (frame_due || summary.stop_signal != 0)
             write_frame(step);
+        if (step % std::max<Index>(control.checkpoint_every, 1) == 0 || step == total || summary.stop_signal != 0)
+            checkpoint(step);
         if (on_progress)
             on_progress(step, total);
     }
-    summary.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    update_wall();
     summary.steps_per_s = summary.wall_s > 0.0 ? summary.steps / summary.wall_s : 0.0;
     if (summary.solves > 0) {
         summary.cg_iterations_mean /= summary.solves;

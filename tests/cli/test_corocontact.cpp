@@ -1,3 +1,4 @@
+#include "cli_run.hpp"
 #include "mesh_fixtures.hpp"
 
 #include <corocontact/config.hpp>
@@ -29,31 +30,12 @@
 
 namespace fs = std::filesystem;
 using ::testing::HasSubstr;
+using coro::test::listed_frames;
+using coro::test::Outcome;
+using coro::test::run;
+using coro::test::slurp;
 
 namespace {
-
-struct Outcome {
-    int exit_code;
-    std::string out;
-    std::string err;
-};
-
-std::string slurp(const fs::path& path)
-{
-    std::ifstream file(path);
-    std::stringstream text;
-    text << file.rdbuf();
-    return text.str();
-}
-
-Outcome run(const std::string& arguments, const fs::path& dir)
-{
-    const fs::path out = dir / "stdout.txt", err = dir / "stderr.txt";
-    const std::string command = std::string(CORO_CLI_PATH) + " " + arguments + " > " + out.string() + " 2> " +
-                                err.string() + " < /dev/null";
-    const int status = std::system(command.c_str());
-    return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, slurp(out), slurp(err)};
-}
 
 const char* SMALL_CASE = R"([simulation]
 dt = 0.01
@@ -76,17 +58,6 @@ young = 1e5
 min = [-1.0, -1.0, -1.0]
 max = [0.0, 2.0, 2.0]
 )";
-
-// Every .vtm the .pvd lists, in order.
-std::vector<std::string> listed_frames(const fs::path& pvd)
-{
-    const std::string text = slurp(pvd);
-    std::vector<std::string> files;
-    const std::regex entry("file=\"([^\"]+)\"");
-    for (auto it = std::sregex_iterator(text.begin(), text.end(), entry); it != std::sregex_iterator(); ++it)
-        files.push_back((*it)[1]);
-    return files;
-}
 
 } // namespace
 

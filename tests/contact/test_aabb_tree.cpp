@@ -254,3 +254,39 @@ TEST(AabbTree, NearestWithHintsEqualsNearestBitForBit)
         }
     }
 }
+
+TEST(AabbTree, NearestIsTheBruteForceMinimumWithSmallestFaceOnTies)
+{
+    // The tree's answer must be, bit for bit, the minimum over all faces of (computed squared
+    // distance, face index): deep points inside a sphere (many faces nearly equally far, where
+    // box and plane bounds prune hardest), points near the surface, and points of a structured
+    // box on its grid planes (exact ties between faces).
+    std::mt19937 rng(12);
+    for (const ContactSurface& s : {surface_of(make_sphere(Vec3(0.1, -0.2, 0.05), 1.0, 10), "sphere"),
+                                    surface_of(make_box(Vec3(0, 0, 0), Vec3(1, 2, 1), {3, 6, 3}), "box")}) {
+        const Aabb box = s.tree.bounds();
+        for (int q = 0; q < 300; ++q) {
+            Vec3 p = random_point(box.min.array() - 0.2, box.max.array() + 0.2, rng);
+            if (q % 3 == 0)
+                p = 0.5 * (box.min + box.max) + 0.1 * (p - 0.5 * (box.min + box.max)); // deep inside
+            if (q % 5 == 0)
+                p = (p * 6.0).array().round() / 6.0; // grid planes of the box: ties
+            double best = std::numeric_limits<double>::infinity();
+            Index best_face = -1;
+            for (Index f = 0; f < s.faces.rows(); ++f) {
+                const TrianglePoint t =
+                    closest_point_on_triangle(p, s.vertices.row(s.faces(f, 0)).transpose(),
+                                              s.vertices.row(s.faces(f, 1)).transpose(),
+                                              s.vertices.row(s.faces(f, 2)).transpose());
+                const double d2 = (t.point - p).squaredNorm();
+                if (d2 < best) {
+                    best = d2;
+                    best_face = f;
+                }
+            }
+            const AabbTree::Nearest got = s.tree.nearest(s.vertices, p);
+            ASSERT_EQ(got.face, best_face) << s.name << " query " << q;
+            ASSERT_EQ(got.distance, std::sqrt(best)) << s.name << " query " << q;
+        }
+    }
+}

@@ -351,14 +351,14 @@ TEST(ReadMsh, RejectsUnsupportedVersion)
     EXPECT_THAT([&] { read_msh(v3); }, input_error_at(v3, 3, "unsupported MSH version '3'"));
 }
 
-TEST(ReadMsh, RejectsBinaryFiles)
+TEST(ReadMsh, RejectsUnknownFileTypeAndBinaryDataSizeOtherThanEight)
 {
-    std::string text = "$MeshFormat\n4.1 1 8\n";
-    text += std::string("\x01\x00\x00\x00\n", 5);
-    text += "$EndMeshFormat\n";
-    const fs::path path = write_msh("binary.msh", text);
-    EXPECT_THAT([&] { read_msh(path); },
-                input_error_at(path, 2, "binary MSH (file-type 1) is not supported yet"));
+    const fs::path type2 = write_msh("type2.msh", "$MeshFormat\n4.1 2 8\n$EndMeshFormat\n");
+    EXPECT_THAT([&] { read_msh(type2); },
+                input_error_at(type2, 2, "expected file-type 0 (ASCII) or 1 (binary), found 2"));
+    const fs::path size4 = write_msh("size4.msh", "$MeshFormat\n2.2 1 4\n$EndMeshFormat\n");
+    EXPECT_THAT([&] { read_msh(size4); },
+                input_error_at(size4, 2, "expected data-size 8"));
 }
 
 TEST(ReadMsh, RejectsMissingEndMeshFormat)
@@ -539,6 +539,25 @@ $EndElements
 )");
     EXPECT_THAT([&] { read_msh(v41); },
                 input_error_at(v41, 19, "tet element 5 references unknown node tag 0"));
+}
+
+TEST(ReadMsh, RejectsTetRepeatingANodeTag)
+{
+    const fs::path path = write_msh("repeated_tag.msh", V22_HEADER + R"($Nodes
+4
+1 0 0 0
+2 1 0 0
+3 0 1 0
+4 0 0 1
+$EndNodes
+$Elements
+1
+8 4 2 0 1 1 2 4 2
+$EndElements
+)");
+    EXPECT_THAT([&] { read_msh(path); },
+                input_error_at(path, 13, "tet element 8 repeats node tag 2 (expected 4 distinct "
+                                         "nodes)"));
 }
 
 TEST(ReadMsh, RejectsDuplicateNodeTag)

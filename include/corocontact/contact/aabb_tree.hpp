@@ -5,7 +5,10 @@
 
 #include <corocontact/contact/aabb.hpp>
 
+#include <xmmintrin.h>
+
 #include <algorithm>
+#include <cmath>
 #include <limits>
 #include <type_traits>
 #include <vector>
@@ -24,16 +27,17 @@ class AabbTree {
 public:
     AabbTree() = default;
 
-    /// Builds the hierarchy over `faces` at `vertices` (median split of the face centroids
-    /// along the longest axis, at most MAX_LEAF_FACES faces per leaf).
+    /// Builds the hierarchy over `faces` at `vertices`: four children per node (median splits
+    /// of the face centroids along the longest axis, twice per node), one face per leaf child.
     /// @param[in] vertices  #V×3 positions
     /// @param[in] faces     #F×3 indices into vertices; the tree stores its own copy of the face
     ///                      list, so `faces` may go away after the call
     void build(CRef<Positions> vertices, const Tris& faces);
 
-    /// Recomputes every box bottom-up for new positions of the same vertices (in parallel, level
-    /// by level, for large trees; every box is a pure function of its children, so the result
-    /// does not depend on the thread count).
+    /// Recomputes every box bottom-up for new positions of the same vertices: one pass over the
+    /// nodes in reverse build order (children before parents), no recursion, no allocation; large
+    /// trees refit their top subtrees as parallel tasks. Every box is a pure function of its
+    /// children, so the result does not depend on the thread count.
     void refit(CRef<Positions> vertices);
 
     /// Box of the whole surface (empty for an empty tree).
@@ -69,7 +73,8 @@ public:
         double distance = 0.0;
     };
     /// Exact point–triangle distances (closest_point_on_triangle), branch and bound over the
-    /// boxes, nearer child first; of equally near faces the first one met wins (deterministic).
+    /// boxes, nearer children first. Of equally near faces (the same computed squared distance)
+    /// the one with the smallest index wins, so the answer does not depend on the traversal.
     /// @param[in] vertices  the positions the tree was last built or refit with
     /// @return face −1 for an empty tree
     Nearest nearest(CRef<Positions> vertices, const Vec3& point) const;
@@ -78,7 +83,7 @@ public:
     /// bound the distance from above: the search starts with that bound instead of +∞, so it
     /// skips the subtrees that cannot hold the answer. The bound is slightly inflated (relative
     /// 10⁻⁶ on the squared distance) before use, so faces tied with the nearest one are still
-    /// visited in the same order and the same one wins.
+    /// visited and the same one wins.
     /// @param[in] distance_bound  a distance that some point of the surface is known to be within
     ///                            (e.g. a face crossing of an axis line through `point`, plus its
     ///                            rounding bound); +∞ for none
@@ -86,106 +91,149 @@ public:
     ///                            −1 for none; any valid face is correct, a near one is faster
     Nearest nearest(CRef<Positions> vertices, const Vec3& point, double distance_bound, Index hint_face) const;
 
-    static constexpr Index MAX_LEAF_FACES = 4;
+    static constexpr Index MAX_LEAF_FACES = 4; ///< faces per node whose children are all faces
     static constexpr Index VERTEX_BLOCK = 32; ///< vertices per box of the vertex query
 
 private:
-    struct Node {
-        Aabb box;
-        Index left = -1;   ///< child node, or −1 for a leaf
-        Index right = -1;
-        Index begin = 0;   ///< leaf: range in m_order
-        Index end = 0;
+    /// One node: up to four children, their boxes in single precision rounded outward (so they
+    /// bound the exact boxes) as structure of arrays, one SSE register per coordinate bound.
+    struct alignas(64) WideNode {
+        float lo[3][4]; ///< [coordinate][child] box minimum
+        float hi[3][4]; ///< [coordinate][child] box maximum
+        /// Face children: unit normal u, offset u·A and slack s such that every point x of the
+        /// face has |u·x − offset| ≤ s (s = +∞ for a degenerate face; node children: +∞), so
+        /// (|u·p − offset| − s)/|u| bounds the face's distance to p from below.
+        float normal[3][4];
+        float offset[4];
+        float slack[4];
+        Index child[4]; ///< ≥ 0: node index; < 0: the face in slot −1 − child of m_order
+        Index count;    ///< children used (2..4; 1 only for a one-face tree), lanes 0..count−1
+        Index face_mask; ///< bit k set: child k is a face
     };
-    /// Traversal copy of a node in single precision, rounded outward (so it bounds the exact
-    /// box); siblings sit next to each other, a pair in one cache line.
-    struct alignas(32) PackedNode {
-        float min[3];
-        float max[3];
-        Index link;  ///< internal: packed index of the left child (the right one follows);
-                     ///< leaf: first slot in m_order
-        Index count; ///< leaf: number of faces (> 0); internal: 0
-    };
-    struct PackedBox {
-        float min[3];
-        float max[3];
-    };
-    void refit_node(CRef<Positions> vertices, Index n);
-    static void pack(const Aabb& box, float* min, float* max);
+    static constexpr int MAX_DEPTH = 60;
+    static constexpr int STACK_SIZE = 3 * MAX_DEPTH + 4;
+    Index build_node(const std::vector<Vec3>& centroids, Index begin, Index end, int depth);
+    void refit_range(const double* data, std::ptrdiff_t stride, Index first, Index last);
+    void refit_node(const double* data, std::ptrdiff_t stride, Index n);
+    static void face_plane(const double* A, const double* B, const double* C, WideNode& w, int k);
 
-    std::vector<Node> m_nodes;      // root at 0; children after their parent
-    std::vector<Index> m_order;     // faces in leaf order
-    std::vector<Aabb> m_face_boxes; // box of face m_order[i], refit with the nodes
-    std::vector<Index> m_levels;    // nodes grouped by height (leaves first) for the parallel refit
-    std::vector<Index> m_level_offsets;
-    std::vector<PackedNode> m_packed;   // root at 0, slot 1 unused, sibling pairs from 2 on
-    std::vector<Index> m_packed_of;     // m_nodes index → m_packed index
-    std::vector<PackedBox> m_packed_faces; // m_face_boxes rounded outward to float
+    std::vector<WideNode> m_nodes;  // root at 0; every subtree is a contiguous range after its root
+    std::vector<Aabb> m_node_boxes; // exact box of each node (union of its children's)
+    std::vector<Index> m_subtree_end; // one past the last node of each node's subtree
+    std::vector<Index> m_task_roots;  // parallel refit: roots of the subtrees refit as tasks
+    std::vector<Index> m_order;       // face of each slot, in leaf order
+    std::vector<Aabb> m_face_boxes;   // exact box of the face in each slot, refit with the nodes
+    std::vector<Index> m_slot_vertices; // 3 per slot: the vertices of the face in that slot
+    Aabb m_bounds;
     std::vector<Index> m_vertex_order;  // used vertices, first appearance in leaf order
     std::vector<Aabb> m_vertex_blocks;  // box of each VERTEX_BLOCK consecutive m_vertex_order entries
     Tris m_faces;
 };
 
+namespace detail {
+/// `x` rounded to a float no greater (down) or no smaller (up): the nearest float, then a step
+/// of at least one ulp outward (a few ulps looser than needed, branch-free).
+inline float float_down(double x)
+{
+    const float f = static_cast<float>(x);
+    return f - (std::abs(f) * 0x1p-23f + 0x1p-126f);
+}
+inline float float_up(double x)
+{
+    const float f = static_cast<float>(x);
+    return f + (std::abs(f) * 0x1p-23f + 0x1p-126f);
+}
+/// A float threshold no smaller than `x` ≥ 0, with a relative margin of 2⁻¹⁸ (covers the
+/// rounding of the single precision lower bounds compared against it); FLT_MAX for +∞.
+inline float float_threshold(double x)
+{
+    const float f = static_cast<float>(std::min(x, 1e38)) * (1.0f + 0x1p-18f);
+    return std::min(f, std::numeric_limits<float>::max());
+}
+} // namespace detail
+
 template <class Visit>
 void AabbTree::faces_on_axis_line(const Vec3& point, int axis, double tolerance, Visit&& visit) const
 {
-    if (m_packed.empty())
+    if (m_nodes.empty())
         return;
     const int u = (axis + 1) % 3, v = (axis + 2) % 3;
     const double pu = point[u], pv = point[v], pa = point[axis];
-    // Branch-free tests: their outcomes are hard to predict. Single precision boxes are rounded
-    // outward, so they never reject what the exact box would accept.
-    const auto crossed = [&](const float* lo, const float* hi) {
-        return (pu >= lo[u] - tolerance) & (pu <= hi[u] + tolerance) & (pv >= lo[v] - tolerance) &
-               (pv <= hi[v] + tolerance);
-    };
-    const auto gap = [&](const float* lo, const float* hi) {
-        return std::max(std::max(static_cast<double>(lo[axis]) - pa, pa - static_cast<double>(hi[axis])), 0.0);
-    };
-    const PackedNode& root = m_packed.front();
-    if (!crossed(root.min, root.max))
-        return;
+    // Single precision boxes are rounded outward and the point's coordinates are widened to a
+    // float interval containing them (grown by the tolerance), so no box the exact test accepts
+    // is rejected; faces that pass get the exact test against their double box.
+    const __m128 pu_lo = _mm_set1_ps(detail::float_down(pu - tolerance));
+    const __m128 pu_hi = _mm_set1_ps(detail::float_up(pu + tolerance));
+    const __m128 pv_lo = _mm_set1_ps(detail::float_down(pv - tolerance));
+    const __m128 pv_hi = _mm_set1_ps(detail::float_up(pv + tolerance));
+    const __m128 pa_lo = _mm_set1_ps(detail::float_down(pa));
+    const __m128 pa_hi = _mm_set1_ps(detail::float_up(pa));
+    const __m128 zero = _mm_setzero_ps();
     double cutoff = std::numeric_limits<double>::infinity();
-    // Only nodes whose box the line crosses are pushed, with their distance along the axis.
-    Index stack[96];
-    double stack_gap[96];
+    __m128 cutoff_f = _mm_set1_ps(std::numeric_limits<float>::max());
+    Index stack[STACK_SIZE];
+    float stack_gap[STACK_SIZE];
     int top = 0;
     stack[top] = 0;
-    stack_gap[top++] = gap(root.min, root.max);
+    stack_gap[top++] = 0.0f;
+    alignas(16) float gaps[4];
     while (top > 0) {
         --top;
-        if (stack_gap[top] > cutoff)
+        if (stack_gap[top] > _mm_cvtss_f32(cutoff_f))
             continue;
-        const PackedNode& node = m_packed[static_cast<std::size_t>(stack[top])];
-        if (node.count > 0) {
-            for (Index i = node.link; i < node.link + node.count; ++i) {
-                const PackedBox& pb = m_packed_faces[static_cast<std::size_t>(i)];
-                if (!crossed(pb.min, pb.max) || gap(pb.min, pb.max) > cutoff)
-                    continue;
-                const Aabb& fb = m_face_boxes[static_cast<std::size_t>(i)]; // the exact test
-                if (pu < fb.min[u] - tolerance || pu > fb.max[u] + tolerance || pv < fb.min[v] - tolerance ||
-                    pv > fb.max[v] + tolerance)
-                    continue;
-                const Index face = m_order[static_cast<std::size_t>(i)];
-                if constexpr (std::is_void_v<decltype(visit(face))>)
-                    visit(face);
-                else
-                    cutoff = std::min(cutoff, static_cast<double>(visit(face)));
+        const WideNode& node = m_nodes[static_cast<std::size_t>(stack[top])];
+        const __m128 crossed = _mm_and_ps(
+            _mm_and_ps(_mm_cmple_ps(_mm_load_ps(node.lo[u]), pu_hi), _mm_cmpge_ps(_mm_load_ps(node.hi[u]), pu_lo)),
+            _mm_and_ps(_mm_cmple_ps(_mm_load_ps(node.lo[v]), pv_hi), _mm_cmpge_ps(_mm_load_ps(node.hi[v]), pv_lo)));
+        // Lower bound of the distance along the axis from the point to each box.
+        const __m128 gap = _mm_max_ps(_mm_max_ps(_mm_sub_ps(_mm_load_ps(node.lo[axis]), pa_hi),
+                                                 _mm_sub_ps(pa_lo, _mm_load_ps(node.hi[axis]))),
+                                      zero);
+        int mask = _mm_movemask_ps(_mm_and_ps(crossed, _mm_cmple_ps(gap, cutoff_f))) & ((1 << node.count) - 1);
+        if (mask == 0)
+            continue;
+        _mm_store_ps(gaps, gap);
+        // Faces now (nearer first), then child nodes pushed farther first (nearer on top).
+        int order[4];
+        int n = 0;
+        for (int k = 0; k < 4; ++k)
+            if (mask & (1 << k)) {
+                int j = n++;
+                while (j > 0 && gaps[order[j - 1]] > gaps[k]) {
+                    order[j] = order[j - 1];
+                    --j;
+                }
+                order[j] = k;
             }
-            continue;
+        for (int i = 0; i < n; ++i) {
+            const Index c = node.child[order[i]];
+            if (c >= 0)
+                continue;
+            const std::size_t slot = static_cast<std::size_t>(-1 - c);
+            const Aabb& fb = m_face_boxes[slot]; // the exact test
+            if (pu < fb.min[u] - tolerance || pu > fb.max[u] + tolerance || pv < fb.min[v] - tolerance ||
+                pv > fb.max[v] + tolerance)
+                continue;
+            if (static_cast<double>(gaps[order[i]]) > cutoff * (1.0 + 0x1p-20))
+                continue;
+            const Index face = m_order[slot];
+            if constexpr (std::is_void_v<decltype(visit(face))>) {
+                visit(face);
+            } else {
+                const double limit = static_cast<double>(visit(face));
+                if (limit < cutoff) {
+                    cutoff = limit;
+                    cutoff_f = _mm_set1_ps(detail::float_threshold(cutoff));
+                }
+            }
         }
-        const PackedNode& l = m_packed[static_cast<std::size_t>(node.link)];
-        const PackedNode& r = m_packed[static_cast<std::size_t>(node.link) + 1];
-        const bool cl = crossed(l.min, l.max), cr = crossed(r.min, r.max);
-        const double gl = gap(l.min, l.max), gr = gap(r.min, r.max);
-        // Farther child first, the nearer one on top; a child the line misses is written, not kept.
-        const bool left_near = gl <= gr;
-        stack[top] = left_near ? node.link + 1 : node.link;
-        stack_gap[top] = left_near ? gr : gl;
-        top += left_near ? cr : cl;
-        stack[top] = left_near ? node.link : node.link + 1;
-        stack_gap[top] = left_near ? gl : gr;
-        top += left_near ? cl : cr;
+        for (int i = n; i-- > 0;) {
+            const Index c = node.child[order[i]];
+            if (c < 0)
+                continue;
+            stack[top] = c;
+            stack_gap[top++] = gaps[order[i]];
+        }
     }
 }
 

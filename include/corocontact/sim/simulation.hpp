@@ -9,9 +9,11 @@
 #include <corocontact/contact/plane_obstacle.hpp>
 #include <corocontact/core/surface_mesh.hpp>
 #include <corocontact/sim/contact_response.hpp>
+#include <corocontact/sim/divergence_check.hpp>
 #include <corocontact/sim/phase_times.hpp>
 #include <corocontact/solver/pcg.hpp>
 
+#include <atomic>
 #include <functional>
 #include <memory>
 #include <vector>
@@ -48,12 +50,35 @@ struct RunSummary {
     Index detections = 0;            ///< detection passes (initial state and every step)
     Index embree_disagreements = 0;  ///< with cross_check = "embree": vertices where Embree and
                                      ///< the axis-ray test disagreed, summed over all detections
+    Index first_step = 0;            ///< the step the loop started from (> 0 after a restart)
+    int stop_signal = 0;             ///< the signal that stopped the loop early, or 0
 };
 
 /// Called for every frame to write: (step, simulated time or load factor).
 using FrameCallback = std::function<void(Index step, double time)>;
 /// Called after every step: (steps done, steps in total).
 using ProgressCallback = std::function<void(Index done, Index total)>;
+/// Called to save the state after step `step` (the scene holds it). In `so_far` the *_mean
+/// fields still hold sums and contacts_mean the sum over detections (what a restart needs to
+/// continue them); wall_s is the loop time up to now.
+using CheckpointCallback = std::function<void(Index step, const RunSummary& so_far)>;
+
+/// Optional controls of a run: stopping on request, checkpoints, continuing a saved run.
+struct RunControl {
+    /// Polled before the first step and after every step; non-zero stops the loop after the
+    /// step in progress (its frame is written) and is reported in RunSummary::stop_signal.
+    const std::atomic<int>* stop = nullptr;
+    /// > 0: on_checkpoint after every checkpoint_every-th step, after the last step and when
+    /// stopped early.
+    Index checkpoint_every = 0;
+    CheckpointCallback on_checkpoint;
+    /// > 0: the scene already holds the state after this step (a restart). The loop continues
+    /// with the next step; frame 0 is not written; the initial detection rebuilds the contact
+    /// response without counting, and `resume_summary` (as a CheckpointCallback received it)
+    /// supplies the counters so far.
+    Index resume_step = 0;
+    RunSummary resume_summary;
+};
 
 /// Runs a scene as its case says.
 class Simulation {
@@ -67,8 +92,12 @@ public:
     /// Runs `steps` time steps (dynamic) or all load steps (static). Frame 0 is the initial
     /// state; then every output_every-th step and the last (every load step when static).
     /// With contact enabled, detection runs on the initial state and after every step.
-    /// @throws NumericalError prefixed with "step N: " when the simulation diverges
-    RunSummary run(Index steps, const FrameCallback& on_frame, const ProgressCallback& on_progress);
+    /// After every step the bodies are checked for divergence (sim/divergence_check.hpp).
+    /// @param[in] control  stop flag, checkpoints, restart (see RunControl)
+    /// @throws NumericalError prefixed with "step N (t = ...): " when the simulation diverges
+    /// @throws InputError if control.resume_step is not below the last step
+    RunSummary run(Index steps, const FrameCallback& on_frame, const ProgressCallback& on_progress,
+                   const RunControl& control = {});
 
     ~Simulation();
     Simulation(const Simulation&) = delete;
@@ -84,6 +113,7 @@ private:
     struct EmbreeCheck;
     std::unique_ptr<EmbreeCheck> m_embree; // cross-check scenes, when asked for
     ContactResponse m_response;            // of the last detection, used by the next step
+    DivergenceCheck m_divergence;          // run after every step
 };
 
 /// PCG settings from the case's [solver] table.

@@ -1,0 +1,9 @@
+// libFuzzer target: read_case on a .toml case file.
+// InputError and NumericalError are expected answers; anything else is a finding.
+#include "fuzz_input.hpp"
+
+extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size)
+{
+    coro::fuzz::feed(coro::fuzz::Target::CASE, data, size);
+    return 0;
+}

@@ -1,0 +1,132 @@
+#pragma once
+// Private to io/: what the Gmsh MSH readers (ASCII and binary) share: the builder that maps
+// node tags to indices in file order and collects tets, and the node count of each element type.
+
+#include <corocontact/core/error.hpp>
+#include <corocontact/core/tet_mesh.hpp>
+
+#include <algorithm>
+#include <array>
+#include <cstdint>
+#include <limits>
+#include <string>
+#include <unordered_map>
+#include <utility>
+#include <vector>
+
+namespace coro::detail {
+
+/// Upper bound on what a header count may pre-allocate: counts are input, so a corrupt
+/// header must not be able to request gigabytes; beyond this, containers grow as they read.
+constexpr std::size_t MSH_RESERVE_CAP = std::size_t{1} << 16;
+
+/// Gmsh element type of the 4-node tetrahedron; every other type is skipped.
+constexpr int MSH_TET4 = 4;
+
+/// Number of nodes of a Gmsh element type (the table of the MSH format documentation), or 0
+/// for a type this table does not know. Binary files need it to skip elements of other types.
+inline int msh_nodes_per_element(int type)
+{
+    static constexpr std::array<int, 32> NODES = {0,  2,  3,  4,  4, 8,  6,  5,  3,  6, 9,
+                                                  10, 27, 18, 14, 1, 8,  20, 15, 13, 9, 10,
+                                                  12, 15, 15, 21, 4, 5,  6,  20, 35, 56};
+    if (type >= 0 && type < static_cast<int>(NODES.size()))
+        return NODES[static_cast<std::size_t>(type)];
+    if (type == 92)
+        return 64; // 3rd-order hexahedron
+    if (type == 93)
+        return 125; // 4th-order hexahedron
+    return 0;
+}
+
+/// Nodes and tets as they are read, with node tags mapped to 0-based indices in file order.
+/// Every check takes `where`, a callable returning the input location ("path:line" or
+/// "path: byte N") that is called only to build a failure message.
+class MshBuilder {
+public:
+    /// @param[in] unit  what a location number counts ("line", "byte"), for duplicate messages
+    explicit MshBuilder(std::string unit) : m_unit(std::move(unit)) {}
+
+    /// Registers the tag of the next node; `location` (line or byte offset) is kept for the
+    /// message about a later duplicate.
+    template <class Where>
+    void add_node_tag(const Where& where, long location, std::uint64_t tag)
+    {
+        const auto index = m_node_locations.size();
+        CORO_CHECK(index < static_cast<std::size_t>(std::numeric_limits<Index>::max()), InputError,
+                   where() << ": too many nodes for a 32-bit index");
+        const auto [it, inserted] = m_index_of_tag.emplace(tag, static_cast<Index>(index));
+        CORO_CHECK(inserted, InputError,
+                   where() << ": duplicate node tag " << tag << " (first defined at " << m_unit
+                           << " " << m_node_locations[static_cast<std::size_t>(it->second)]
+                           << ")");
+        m_node_locations.push_back(location);
+    }
+
+    /// Appends the coordinates of the next node; `add_node_tag` must have been called first.
+    void add_node_coordinates(const std::array<double, 3>& x)
+    {
+        m_positions.insert(m_positions.end(), x.begin(), x.end());
+    }
+
+    /// Reserves for `count` more nodes, at most MSH_RESERVE_CAP.
+    void reserve_nodes(std::uint64_t count)
+    {
+        const auto n = static_cast<std::size_t>(std::min<std::uint64_t>(count, MSH_RESERVE_CAP));
+        m_node_locations.reserve(m_node_locations.size() + n);
+        m_positions.reserve(m_positions.size() + 3 * n);
+        m_index_of_tag.reserve(m_index_of_tag.size() + n);
+    }
+
+    /// Reserves for `count` more tets, at most MSH_RESERVE_CAP.
+    void reserve_elements(std::uint64_t count)
+    {
+        const auto n = static_cast<std::size_t>(std::min<std::uint64_t>(count, MSH_RESERVE_CAP));
+        m_tets.reserve(m_tets.size() + 4 * n);
+    }
+
+    /// Appends a tet given by node tags, mapping them to indices; the tags must be distinct and
+    /// known.
+    template <class Where>
+    void add_tet(const Where& where, std::uint64_t element_tag,
+                 const std::array<std::uint64_t, 4>& node_tags)
+    {
+        CORO_CHECK(m_tets.size() / 4 < static_cast<std::size_t>(std::numeric_limits<Index>::max()),
+                   InputError, where() << ": too many tets for a 32-bit index");
+        for (std::size_t k = 0; k < node_tags.size(); ++k) {
+            const std::uint64_t tag = node_tags[k];
+            for (std::size_t j = 0; j < k; ++j)
+                CORO_CHECK(node_tags[j] != tag, InputError,
+                           where() << ": tet element " << element_tag << " repeats node tag " << tag
+                                   << " (expected 4 distinct nodes)");
+            const auto it = m_index_of_tag.find(tag);
+            CORO_CHECK(it != m_index_of_tag.end(), InputError,
+                       where() << ": tet element " << element_tag << " references unknown node tag "
+                               << tag);
+            m_tets.push_back(it->second);
+        }
+    }
+
+    /// Number of nodes read so far.
+    std::size_t num_nodes() const { return m_node_locations.size(); }
+
+    /// The mesh as read (not validated, not oriented).
+    TetMesh finish() const
+    {
+        TetMesh mesh;
+        const auto n_nodes = static_cast<Eigen::Index>(m_node_locations.size());
+        const auto n_tets = static_cast<Eigen::Index>(m_tets.size() / 4);
+        mesh.rest_positions = Eigen::Map<const Positions>(m_positions.data(), n_nodes, 3);
+        mesh.tets = Eigen::Map<const Tets>(m_tets.data(), n_tets, 4);
+        return mesh;
+    }
+
+private:
+    std::string m_unit;
+    std::vector<double> m_positions;     // 3 per node, in file order
+    std::vector<long> m_node_locations;  // line or byte of each node's tag
+    std::unordered_map<std::uint64_t, Index> m_index_of_tag;
+    std::vector<Index> m_tets; // 4 per tet
+};
+
+} // namespace coro::detail
