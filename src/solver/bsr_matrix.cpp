@@ -1,5 +1,7 @@
 #include <corocontact/solver/bsr_matrix.hpp>
 
+#include "detail/upper_block_kernels.hpp"
+
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_reduce.h>
@@ -131,40 +133,12 @@ void BsrMatrix::add_symmetric_part(Index row, Index column, const Mat3& value)
 
 void BsrMatrix::multiply_upper_chunks(const double* xd, double* yd) const
 {
-    const double* values = m_values.data();
-    const Index* columns = m_columns.data();
-    const Index* offsets = m_row_offsets.data();
     const auto n_chunks = static_cast<Index>(m_chunk_offsets.size()) - 1;
     tbb::parallel_for(tbb::blocked_range<Index>(0, n_chunks, 1), [&](const tbb::blocked_range<Index>& range) {
         for (Index chunk = range.begin(); chunk != range.end(); ++chunk) {
             const Index begin = m_chunk_offsets[at(chunk)], end = m_chunk_offsets[at(chunk) + 1];
             std::fill(yd + 3 * static_cast<std::ptrdiff_t>(begin), yd + 3 * static_cast<std::ptrdiff_t>(end), 0.0);
-            for (Index r = begin; r != end; ++r) {
-                const double* xr = xd + 3 * static_cast<std::ptrdiff_t>(r);
-                // The diagonal block first (it is the row's first), then the blocks above it:
-                // A_rc x_c into row r, and A_rcᵀ x_r into row c when c is in this chunk.
-                const double* d = values + 9 * static_cast<std::ptrdiff_t>(offsets[r]);
-                double y0 = yd[3 * r] + d[0] * xr[0] + d[1] * xr[1] + d[2] * xr[2];
-                double y1 = yd[3 * r + 1] + d[3] * xr[0] + d[4] * xr[1] + d[5] * xr[2];
-                double y2 = yd[3 * r + 2] + d[6] * xr[0] + d[7] * xr[1] + d[8] * xr[2];
-                for (Index k = offsets[r] + 1; k < offsets[r + 1]; ++k) {
-                    const double* a = values + 9 * static_cast<std::ptrdiff_t>(k);
-                    const Index c = columns[k];
-                    const double* xc = xd + 3 * static_cast<std::ptrdiff_t>(c);
-                    y0 += a[0] * xc[0] + a[1] * xc[1] + a[2] * xc[2];
-                    y1 += a[3] * xc[0] + a[4] * xc[1] + a[5] * xc[2];
-                    y2 += a[6] * xc[0] + a[7] * xc[1] + a[8] * xc[2];
-                    if (c < end) {
-                        double* yc = yd + 3 * static_cast<std::ptrdiff_t>(c);
-                        yc[0] += a[0] * xr[0] + a[3] * xr[1] + a[6] * xr[2];
-                        yc[1] += a[1] * xr[0] + a[4] * xr[1] + a[7] * xr[2];
-                        yc[2] += a[2] * xr[0] + a[5] * xr[1] + a[8] * xr[2];
-                    }
-                }
-                yd[3 * r] = y0;
-                yd[3 * r + 1] = y1;
-                yd[3 * r + 2] = y2;
-            }
+            detail::upper_chunk_rows(m_values.data(), m_columns.data(), m_row_offsets.data(), xd, yd, begin, end);
         }
     });
 }
@@ -172,20 +146,9 @@ void BsrMatrix::multiply_upper_chunks(const double* xd, double* yd) const
 void BsrMatrix::gather_upper_row(const double* xd, double* yd, Index row) const
 {
     const Index first = m_gather_offsets[at(row)], last = m_gather_offsets[at(row) + 1];
-    if (first == last)
-        return;
-    double y0 = yd[3 * row], y1 = yd[3 * row + 1], y2 = yd[3 * row + 2];
-    for (Index e = first; e < last; ++e) {
-        const auto [k, source] = m_gather_blocks[at(e)];
-        const double* a = m_values.data() + 9 * static_cast<std::ptrdiff_t>(k);
-        const double* xs = xd + 3 * static_cast<std::ptrdiff_t>(source);
-        y0 += a[0] * xs[0] + a[3] * xs[1] + a[6] * xs[2];
-        y1 += a[1] * xs[0] + a[4] * xs[1] + a[7] * xs[2];
-        y2 += a[2] * xs[0] + a[5] * xs[1] + a[8] * xs[2];
-    }
-    yd[3 * row] = y0;
-    yd[3 * row + 1] = y1;
-    yd[3 * row + 2] = y2;
+    if (first != last)
+        detail::gather_row(m_values.data(), m_gather_blocks.data(), first, last, xd,
+                           yd + 3 * static_cast<std::ptrdiff_t>(row));
 }
 
 void BsrMatrix::multiply(CRef<VecX> x, Eigen::Ref<VecX> y) const
