@@ -359,7 +359,7 @@ TetMesh read_msh(const std::filesystem::path& path)
         return detail::read_msh_binary(path.string(), text);
     const MshVersion version = format.version;
 
-    MshBuilder builder("line");
+    MshBuilder builder("line", text.size());
     long nodes_line = 0;
     long elements_line = 0;
     while (cursor.next(line)) {

@@ -412,7 +412,7 @@ TetMesh read_msh_binary(const std::string& path, std::string_view data)
 {
     ByteReader in(path, data);
     const Version version = read_format(in);
-    MshBuilder builder("byte");
+    MshBuilder builder("byte", data.size());
     std::size_t nodes_at = 0;
     std::size_t elements_at = 0;
     std::string_view line;

@@ -3,6 +3,10 @@
 // frame, plain first-hit rays, and the axis-ray exact detector on the same frames.
 //
 //   bench_embree [--threads N] [benchmark options]      (N defaults to 2)
+//   bench_embree [--threads N] --summary FRAMES
+//       every path (exact, paper, brute force, Embree; with and without depth) on the same
+//       frames in one run, interleaved frame by frame; prints refit, Embree update, detection
+//       and frame times (medians), vertex queries/s and the exact/Embree ratios per frame
 //
 // Arguments of each benchmark: sphere resolution (12: ~10k tets, 26: ~105k tets per sphere)
 // and, for Embree, the build setting (0 refit, 1 LOW rebuild, 2 MEDIUM rebuild).
@@ -17,7 +21,10 @@
 
 #include <tbb/global_control.h>
 
+#include <algorithm>
+#include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <map>
@@ -312,6 +319,101 @@ void BM_AxisRayFrameInsideOnly(benchmark::State& state)
     label(state, sc, "axis-ray exact, inside only");
 }
 
+
+// --summary: every path on the same frames in one run, interleaved frame by frame (so that a
+// loaded machine slows them alike), median wall time per frame of each part. See main().
+struct PathTimes {
+    std::vector<double> refit, detect; // seconds per frame
+    double queries = 0.0, inside = 0.0;
+};
+
+double median(std::vector<double> v)
+{
+    if (v.empty())
+        return 0.0;
+    std::sort(v.begin(), v.end());
+    return v[v.size() / 2];
+}
+
+template <class F>
+double seconds(F&& f)
+{
+    const auto t0 = std::chrono::steady_clock::now();
+    f();
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+void summary(Index resolution, int frames, std::size_t threads)
+{
+    const Scene& sc = scene(resolution);
+    enum Path { EXACT, EXACT_INSIDE, PAPER, PAPER_INSIDE, BRUTE_INSIDE, EMBREE, EMBREE_INSIDE, N_PATHS };
+    const char* names[N_PATHS] = {"exact",  "exact, inside only",  "paper", "paper, inside only",
+                                  "brute force, inside only", "embree", "embree, inside only"};
+    std::vector<PathTimes> t(N_PATHS);
+    std::vector<std::vector<ContactSurface>> surfaces(N_PATHS, sc.surfaces[0]);
+    detail::EmbreeSceneSet scenes(sc.surfaces[0], detail::EmbreeBuild::REFIT);
+    std::vector<double> embree_update;
+    const int brute_frames = std::min(frames, resolution > 16 ? 4 : 16);
+    for (int f = 0; f < frames; ++f) {
+        const auto& nodes = sc.frames[static_cast<std::size_t>((f + 1) % FRAMES)];
+        for (int p = 0; p < N_PATHS; ++p) {
+            if (p == BRUTE_INSIDE && f >= brute_frames)
+                continue;
+            std::vector<ContactSurface>& s = surfaces[static_cast<std::size_t>(p)];
+            PathTimes& pt = t[static_cast<std::size_t>(p)];
+            pt.refit.push_back(seconds([&] {
+                for (std::size_t b = 0; b < s.size(); ++b)
+                    s[b].update(nodes[b]);
+            }));
+            DetectionSettings settings;
+            settings.contact_data = p == EXACT || p == PAPER || p == EMBREE;
+            settings.mode = p == PAPER || p == PAPER_INSIDE ? DetectionMode::PAPER
+                            : p == BRUTE_INSIDE             ? DetectionMode::BRUTE_FORCE
+                                                            : DetectionMode::EXACT;
+            DetectionStats stats;
+            if (p == EMBREE || p == EMBREE_INSIDE) {
+                embree_update.push_back(seconds([&] { scenes.update(s); }));
+                pt.detect.push_back(seconds([&] {
+                    benchmark::DoNotOptimize(detail::detect_contacts_embree(s, scenes, settings, &stats, nullptr));
+                }));
+            } else {
+                pt.detect.push_back(
+                    seconds([&] { benchmark::DoNotOptimize(detect_contacts(s, settings, &stats)); }));
+            }
+            pt.queries += stats.candidate_vertices;
+            pt.inside += stats.inside;
+        }
+    }
+    const double update = median(embree_update);
+    std::printf("\n== two deforming spheres, %d tets each, %ld faces each, deep overlap; %zu TBB threads; "
+                "median wall time per frame over %d frames (brute force %d) ==\n",
+                sc.tets_per_sphere, static_cast<long>(sc.surfaces[0][0].faces.rows()), threads, frames,
+                brute_frames);
+    std::printf("%-26s %10s %10s %10s %12s %10s %10s\n", "path", "refit ms", "update ms", "detect ms",
+                "frame ms", "queries", "Mqueries/s");
+    std::vector<double> frame(N_PATHS);
+    for (int p = 0; p < N_PATHS; ++p) {
+        const PathTimes& pt = t[static_cast<std::size_t>(p)];
+        const bool embree = p == EMBREE || p == EMBREE_INSIDE;
+        const double r = median(pt.refit), d = median(pt.detect), u = embree ? update : 0.0;
+        frame[static_cast<std::size_t>(p)] = r + u + d;
+        const double n = pt.queries / static_cast<double>(pt.detect.size());
+        std::printf("%-26s %10.3f %10.3f %10.3f %12.3f %10.0f %10.2f\n", names[p], 1e3 * r, 1e3 * u, 1e3 * d,
+                    1e3 * (r + u + d), n, 1e-6 * n / d);
+    }
+    const double refit_emb = median(t[EMBREE].refit), refit_emb_in = median(t[EMBREE_INSIDE].refit);
+    std::printf("refit = copy of the surface vertices + our AABB-tree refit (the Embree path needs it too: mid "
+                "phase, depth); update = Embree's per-frame refit (vertex upload + rtcCommitScene); detect = broad, "
+                "mid, narrow phase (+ nearest-point depth and normal unless 'inside only'), sorted output; "
+                "Mqueries/s = candidate vertices / detect time\n");
+    std::printf("ratio exact/Embree per frame, with depth:   %.3f  (refit+detect vs refit+update+detect)\n",
+                frame[EXACT] / frame[EMBREE]);
+    std::printf("ratio exact/Embree per frame, inside only:  %.3f\n", frame[EXACT_INSIDE] / frame[EMBREE_INSIDE]);
+    std::printf("ratio exact/Embree, Embree not charged for our refit: with depth %.3f, inside only %.3f  "
+                "(exact refit+detect vs Embree update+detect)\n",
+                frame[EXACT] / (frame[EMBREE] - refit_emb), frame[EXACT_INSIDE] / (frame[EMBREE_INSIDE] - refit_emb_in));
+}
+
 void embree_args(benchmark::internal::Benchmark* b)
 {
     for (int res : {12, 26})
@@ -343,15 +445,25 @@ int main(int argc, char** argv)
 {
     // --threads N (default 2) sets the TBB thread count; the rest goes to Google Benchmark.
     std::size_t threads = 2;
+    int summary_frames = 0;
     std::vector<char*> args;
     for (int i = 0; i < argc; ++i) {
         if (std::strcmp(argv[i], "--threads") == 0 && i + 1 < argc) {
             threads = static_cast<std::size_t>(std::strtoul(argv[++i], nullptr, 10));
             continue;
         }
+        if (std::strcmp(argv[i], "--summary") == 0 && i + 1 < argc) {
+            summary_frames = std::atoi(argv[++i]);
+            continue;
+        }
         args.push_back(argv[i]);
     }
     const tbb::global_control control(tbb::global_control::max_allowed_parallelism, threads);
+    if (summary_frames > 0) {
+        for (const Index resolution : {12, 26})
+            summary(resolution, summary_frames, threads);
+        return 0;
+    }
     int n = static_cast<int>(args.size());
     benchmark::Initialize(&n, args.data());
     if (benchmark::ReportUnrecognizedArguments(n, args.data()))

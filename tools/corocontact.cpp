@@ -32,7 +32,6 @@
 #include <chrono>
 #include <csignal>
 #include <cstdio>
-#include <fstream>
 #include <iostream>
 #include <memory>
 
@@ -132,13 +131,17 @@ int run_case(const RunOptions& options)
                                    << last_step << " (nothing to continue; give a later --steps)");
         control.resume_step = state.step;
         control.resume_summary = state.summary;
+        std::size_t missing = 0;
         for (const coro::FrameRecord& frame : state.frames) {
             if (std::filesystem::exists(spec.simulation.output_dir / frame_file(spec.simulation.name, frame.step)))
                 frames.push_back(frame);
             else
-                std::cerr << "warning: frame " << frame.step << " of the first run is not in "
-                          << spec.simulation.output_dir.string() << "; the series starts without it\n";
+                ++missing;
         }
+        if (missing > 0)
+            std::cerr << "warning: " << missing << " of the " << state.frames.size()
+                      << " frames the first run wrote up to step " << state.step << " are not in "
+                      << spec.simulation.output_dir.string() << "; the series lists only the others\n";
         if (!options.quiet)
             std::cerr << "continuing from step " << state.step << " (" << options.restart << ")\n";
     }

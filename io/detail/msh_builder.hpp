@@ -16,9 +16,10 @@
 
 namespace coro::detail {
 
-/// Upper bound on what a header count may pre-allocate: counts are input, so a corrupt
-/// header must not be able to request gigabytes; beyond this, containers grow as they read.
-constexpr std::size_t MSH_RESERVE_CAP = std::size_t{1} << 16;
+/// Fewest bytes one node or one element takes in any MSH flavour ("1 0 0 0\n", "1 4 0 1 2 3 4\n"
+/// minus blanks): a header count is never trusted beyond what the file's size can hold.
+constexpr std::size_t MSH_MIN_NODE_BYTES = 8;
+constexpr std::size_t MSH_MIN_ELEMENT_BYTES = 10;
 
 /// Gmsh element type of the 4-node tetrahedron; every other type is skipped.
 constexpr int MSH_TET4 = 4;
@@ -44,8 +45,12 @@ inline int msh_nodes_per_element(int type)
 /// "path: byte N") that is called only to build a failure message.
 class MshBuilder {
 public:
-    /// @param[in] unit  what a location number counts ("line", "byte"), for duplicate messages
-    explicit MshBuilder(std::string unit) : m_unit(std::move(unit)) {}
+    /// @param[in] unit        what a location number counts ("line", "byte"), for messages
+    /// @param[in] file_bytes  size of the file: reservations never exceed what it can hold
+    MshBuilder(std::string unit, std::size_t file_bytes)
+        : m_unit(std::move(unit)), m_file_bytes(file_bytes)
+    {
+    }
 
     /// Registers the tag of the next node; `location` (line or byte offset) is kept for the
     /// message about a later duplicate.
@@ -69,19 +74,21 @@ public:
         m_positions.insert(m_positions.end(), x.begin(), x.end());
     }
 
-    /// Reserves for `count` more nodes, at most MSH_RESERVE_CAP.
+    /// Reserves for `count` more nodes, at most as many as the file's bytes can hold.
     void reserve_nodes(std::uint64_t count)
     {
-        const auto n = static_cast<std::size_t>(std::min<std::uint64_t>(count, MSH_RESERVE_CAP));
+        const auto n = static_cast<std::size_t>(
+            std::min<std::uint64_t>(count, m_file_bytes / MSH_MIN_NODE_BYTES + 1));
         m_node_locations.reserve(m_node_locations.size() + n);
         m_positions.reserve(m_positions.size() + 3 * n);
         m_index_of_tag.reserve(m_index_of_tag.size() + n);
     }
 
-    /// Reserves for `count` more tets, at most MSH_RESERVE_CAP.
+    /// Reserves for `count` more tets, at most as many as the file's bytes can hold.
     void reserve_elements(std::uint64_t count)
     {
-        const auto n = static_cast<std::size_t>(std::min<std::uint64_t>(count, MSH_RESERVE_CAP));
+        const auto n = static_cast<std::size_t>(
+            std::min<std::uint64_t>(count, m_file_bytes / MSH_MIN_ELEMENT_BYTES + 1));
         m_tets.reserve(m_tets.size() + 4 * n);
     }
 
@@ -123,6 +130,7 @@ public:
 
 private:
     std::string m_unit;
+    std::size_t m_file_bytes = 0;
     std::vector<double> m_positions;     // 3 per node, in file order
     std::vector<long> m_node_locations;  // line or byte of each node's tag
     std::unordered_map<std::uint64_t, Index> m_index_of_tag;

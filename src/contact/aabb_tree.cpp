@@ -28,7 +28,7 @@ TrianglePoint closest_point_on_segment(const Vec3& p, const Vec3& a, const Vec3&
 
 } // namespace
 
-void AabbTree::face_plane(const double* A, const double* B, const double* C, WideNode& w, int k)
+void AabbTree::face_plane(const double* A, const double* B, const double* C, FacePlanes& w, int k)
 {
     // In single precision: u = the normalised cross product of the edges rounded to float, the
     // offset u·A. The slack is measured: for x = A + s·e1 + t·e2 on the face, u·(x − A) =
@@ -113,6 +113,8 @@ Index AabbTree::build_node(const std::vector<Vec3>& centroids, Index begin, Inde
                                                                   << MAX_DEPTH << " levels");
     const Index node = static_cast<Index>(m_nodes.size());
     m_nodes.emplace_back();
+    m_node_slots.push_back(begin);
+    m_node_slots.push_back(end);
     // Up to four parts, kept in range order: the largest part is split at the median of its
     // centroids along their longest axis until there are `target` parts: every face on its own
     // for up to four faces, else parts of at most four faces where that takes at most four
@@ -146,15 +148,11 @@ Index AabbTree::build_node(const std::vector<Vec3>& centroids, Index begin, Inde
         ++parts;
     }
     WideNode& w = m_nodes[static_cast<std::size_t>(node)];
-    for (int k = 0; k < 4; ++k) {
+    for (int k = 0; k < 4; ++k)
         for (int c = 0; c < 3; ++c) {
             w.lo[c][k] = std::numeric_limits<float>::infinity();
             w.hi[c][k] = -std::numeric_limits<float>::infinity();
-            w.normal[c][k] = 0.0f;
         }
-        w.offset[k] = 0.0f;
-        w.slack[k] = std::numeric_limits<float>::infinity();
-    }
     w.count = parts;
     w.face_mask = 0;
     for (int k = 0; k < 4; ++k)
@@ -182,6 +180,9 @@ void AabbTree::build(CRef<Positions> vertices, const Tris& faces)
     m_vertex_blocks.clear();
     m_face_boxes.clear();
     m_slot_vertices.clear();
+    m_planes.clear();
+    m_planes_current = false;
+    m_node_slots.clear();
     m_bounds = Aabb{};
     if (faces.rows() == 0)
         return;
@@ -267,7 +268,6 @@ void AabbTree::refit_node(const double* data, std::ptrdiff_t stride, Index n)
             _mm_store_sd(fb.min.data() + 2, bl_z);
             _mm_storeu_pd(fb.max.data(), bh_xy);
             _mm_store_sd(fb.max.data() + 2, bh_z);
-            face_plane(a, b, d, w, k);
         } else {
             const Aabb& cb = m_node_boxes[static_cast<std::size_t>(c)];
             bl_xy = _mm_loadu_pd(cb.min.data());
@@ -304,6 +304,7 @@ void AabbTree::refit_range(const double* data, std::ptrdiff_t stride, Index firs
 
 void AabbTree::refit(CRef<Positions> vertices)
 {
+    m_planes_current = false;
     if (m_nodes.empty())
         return;
     const double* data = vertices.data();
@@ -347,6 +348,122 @@ void AabbTree::refit(CRef<Positions> vertices)
         m_vertex_blocks[b].min = Vec3(lo[0], lo[1], lo[2]);
         m_vertex_blocks[b].max = Vec3(hi[0], hi[1], hi[2]);
     }
+}
+
+void AabbTree::update_planes(CRef<Positions> vertices) const
+{
+    // Subtrees of more faces get no slab: computing one costs a pass over their vertices.
+    constexpr std::size_t SLAB_MAX_FACES = 64;
+    if (m_planes_current)
+        return;
+    m_planes.resize(m_nodes.size());
+    const double* data = vertices.data();
+    const std::ptrdiff_t stride = vertices.outerStride();
+    // Area-weighted face normals per slot, and per node their sum and the sum of their lengths
+    // (bottom-up: children follow their parents): a node slab's direction is its sum.
+    std::vector<Vec3> normals(m_order.size());
+    std::vector<double> lengths(m_order.size());
+    const auto normals_of = [&](std::size_t begin, std::size_t end) {
+        for (std::size_t i = begin; i < end; ++i) {
+            const Index* fv = &m_slot_vertices[3 * i];
+            const Vec3 a(data + stride * fv[0]), b(data + stride * fv[1]), c(data + stride * fv[2]);
+            normals[i] = (b - a).cross(c - a);
+            lengths[i] = normals[i].norm();
+        }
+    };
+    std::vector<Vec3> node_sum(m_nodes.size());
+    std::vector<double> node_total(m_nodes.size());
+    const auto sums = [&] {
+        for (std::size_t n = m_nodes.size(); n-- > 0;) {
+            const WideNode& w = m_nodes[n];
+            Vec3 sum = Vec3::Zero();
+            double total = 0.0;
+            for (int k = 0; k < w.count; ++k) {
+                const Index c = w.child[k];
+                if (c < 0) {
+                    sum += normals[static_cast<std::size_t>(-1 - c)];
+                    total += lengths[static_cast<std::size_t>(-1 - c)];
+                } else {
+                    sum += node_sum[static_cast<std::size_t>(c)];
+                    total += node_total[static_cast<std::size_t>(c)];
+                }
+            }
+            node_sum[n] = sum;
+            node_total[n] = total;
+        }
+    };
+    // A child node's slab: along the unit direction u of its faces' summed normals, the range of
+    // u·x over its faces' vertices (so over its faces), stored as offset ± slack with the float
+    // rounding of u and the offset and the double rounding of u·x covered. Only for nodes whose
+    // normals spread little (|sum| > 0.7·Σ|n|, within about 45°): wider patches get no slab
+    // (slack +∞), their box bounds as well.
+    const auto slab_of = [&](Index node, FacePlanes& fp, int k) {
+        fp.normal[0][k] = fp.normal[1][k] = fp.normal[2][k] = 0.0f;
+        fp.offset[k] = 0.0f;
+        fp.slack[k] = std::numeric_limits<float>::infinity();
+        const Vec3& sum = node_sum[static_cast<std::size_t>(node)];
+        const double len = sum.norm();
+        if (!(len > 0.7 * node_total[static_cast<std::size_t>(node)]) || !std::isfinite(len))
+            return;
+        const std::size_t begin = static_cast<std::size_t>(m_node_slots[2 * static_cast<std::size_t>(node)]);
+        const std::size_t end = static_cast<std::size_t>(m_node_slots[2 * static_cast<std::size_t>(node) + 1]);
+        if (end - begin > SLAB_MAX_FACES)
+            return;
+        const float u[3] = {static_cast<float>(sum[0] / len), static_cast<float>(sum[1] / len),
+                            static_cast<float>(sum[2] / len)};
+        const double ud[3] = {u[0], u[1], u[2]};
+        double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+        for (std::size_t i = 3 * begin; i < 3 * end; ++i) {
+            const double* x = data + stride * m_slot_vertices[i];
+            const double t = ud[0] * x[0] + ud[1] * x[1] + ud[2] * x[2];
+            lo = std::min(lo, t);
+            hi = std::max(hi, t);
+        }
+        const Aabb& box = m_node_boxes[static_cast<std::size_t>(node)];
+        const double magnitude = box.min.cwiseAbs().sum() + box.max.cwiseAbs().sum();
+        const double mid = 0.5 * (lo + hi);
+        const float off = static_cast<float>(mid);
+        const double slack = 0.5 * (hi - lo) + std::abs(static_cast<double>(off) - mid) + 1e-14 * magnitude;
+        for (int j = 0; j < 3; ++j)
+            fp.normal[j][k] = u[j];
+        fp.offset[k] = off;
+        fp.slack[k] = detail::float_up(slack);
+    };
+    const auto planes_of = [&](std::size_t n) {
+        const WideNode& w = m_nodes[n];
+        FacePlanes& fp = m_planes[n];
+        for (int k = 0; k < 4; ++k) {
+            const Index c = k < w.count ? w.child[k] : 0;
+            if (k >= w.count) {
+                fp.normal[0][k] = fp.normal[1][k] = fp.normal[2][k] = 0.0f;
+                fp.offset[k] = 0.0f;
+                fp.slack[k] = std::numeric_limits<float>::infinity();
+            } else if (c >= 0) {
+                slab_of(c, fp, k);
+            } else {
+                const Index* fv = &m_slot_vertices[3 * static_cast<std::size_t>(-1 - c)];
+                face_plane(data + stride * fv[0], data + stride * fv[1], data + stride * fv[2], fp, k);
+            }
+        }
+    };
+    // Every node's planes depend only on its own faces: any split gives the same result.
+    constexpr std::size_t GRAIN = 512;
+    if (m_nodes.size() < 4 * GRAIN) {
+        normals_of(0, normals.size());
+        sums();
+        for (std::size_t n = 0; n < m_nodes.size(); ++n)
+            planes_of(n);
+    } else {
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, normals.size(), 4 * GRAIN),
+                          [&](const tbb::blocked_range<std::size_t>& r) { normals_of(r.begin(), r.end()); });
+        sums();
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, m_nodes.size(), GRAIN),
+                          [&](const tbb::blocked_range<std::size_t>& r) {
+                              for (std::size_t n = r.begin(); n < r.end(); ++n)
+                                  planes_of(n);
+                          });
+    }
+    m_planes_current = true;
 }
 
 const Aabb& AabbTree::bounds() const { return m_bounds; }
@@ -445,7 +562,8 @@ AabbTree::Nearest AabbTree::nearest(CRef<Positions> vertices, const Vec3& point,
         --top;
         if (stack_d2[top] > threshold)
             continue;
-        const WideNode& node = m_nodes[static_cast<std::size_t>(stack[top])];
+        const std::size_t node_index = static_cast<std::size_t>(stack[top]);
+        const WideNode& node = m_nodes[node_index];
         __m128 sum = zero;
         for (int j = 0; j < 3; ++j) {
             const __m128 d = _mm_max_ps(_mm_max_ps(_mm_sub_ps(_mm_load_ps(node.lo[j]), p_hi[j]),
@@ -457,45 +575,38 @@ AabbTree::Nearest AabbTree::nearest(CRef<Positions> vertices, const Vec3& point,
         if (mask == 0)
             continue;
         _mm_store_ps(d2, sum);
-        int order[4];
-        int n = 0;
-        for (int k = 0; k < 4; ++k)
-            if (mask & (1 << k)) {
-                int j = n++;
-                while (j > 0 && d2[order[j - 1]] > d2[k]) {
-                    order[j] = order[j - 1];
-                    --j;
-                }
-                order[j] = k;
-            }
-        // Faces first, nearer first; then the child nodes, the nearest on top of the stack.
+        // Faces first (lane order: of equally near faces the smallest index wins anyway), then
+        // the child nodes, the nearest on top of the stack.
         // A face whose plane slab lies beyond the threshold is skipped: |u·p − offset| is
         // computed in float from p's rounding; the error of that (a few float ulps of
         // |p|₁ + |offset|, taken 8 times over) is subtracted before the comparison.
-        if (mask & node.face_mask) {
-            __m128 dot = _mm_sub_ps(_mm_mul_ps(_mm_load_ps(node.normal[0]), p_f[0]), _mm_load_ps(node.offset));
-            dot = _mm_add_ps(dot, _mm_mul_ps(_mm_load_ps(node.normal[1]), p_f[1]));
-            dot = _mm_add_ps(dot, _mm_mul_ps(_mm_load_ps(node.normal[2]), p_f[2]));
+        if (m_planes_current) {
+            const FacePlanes& fp = m_planes[node_index];
+            __m128 dot = _mm_sub_ps(_mm_mul_ps(_mm_load_ps(fp.normal[0]), p_f[0]), _mm_load_ps(fp.offset));
+            dot = _mm_add_ps(dot, _mm_mul_ps(_mm_load_ps(fp.normal[1]), p_f[1]));
+            dot = _mm_add_ps(dot, _mm_mul_ps(_mm_load_ps(fp.normal[2]), p_f[2]));
             const __m128 abs_mask = _mm_castsi128_ps(_mm_set1_epi32(0x7fffffff));
-            const __m128 error = _mm_add_ps(p_error, _mm_mul_ps(_mm_and_ps(_mm_load_ps(node.offset), abs_mask),
+            const __m128 error = _mm_add_ps(p_error, _mm_mul_ps(_mm_and_ps(_mm_load_ps(fp.offset), abs_mask),
                                                                 _mm_set1_ps(0x1p-20f)));
-            const __m128 lower = _mm_sub_ps(_mm_sub_ps(_mm_and_ps(dot, abs_mask), _mm_load_ps(node.slack)), error);
+            const __m128 lower = _mm_sub_ps(_mm_sub_ps(_mm_and_ps(dot, abs_mask), _mm_load_ps(fp.slack)), error);
             // (1 − 2⁻¹⁸)·lower ≤ the distance (|u| ≤ 1 + 2⁻²²); skipped when its square is above
             // the threshold.
             const __m128 scaled = _mm_mul_ps(_mm_max_ps(lower, zero), _mm_set1_ps(1.0f - 0x1p-18f));
             mask &= ~_mm_movemask_ps(_mm_cmpgt_ps(_mm_mul_ps(scaled, scaled), _mm_set1_ps(threshold)));
         }
-        for (int i = 0; i < n; ++i) {
-            const Index c = node.child[order[i]];
-            if (c >= 0 || d2[order[i]] > threshold || !(mask & (1 << order[i])))
+        int faces = mask & node.face_mask;
+        for (; faces != 0; faces &= faces - 1) {
+            const int k = __builtin_ctz(static_cast<unsigned>(faces));
+            if (d2[k] > threshold)
                 continue;
-            const Index f = m_order[static_cast<std::size_t>(-1 - c)];
-            const double* A = data + stride * m_faces(f, 0);
-            const double* B = data + stride * m_faces(f, 1);
-            const double* C = data + stride * m_faces(f, 2);
+            const Index* fv = &m_slot_vertices[3 * static_cast<std::size_t>(-1 - node.child[k])];
+            const double* A = data + stride * fv[0];
+            const double* B = data + stride * fv[1];
+            const double* C = data + stride * fv[2];
             const TrianglePoint q =
                 closest_point_on_triangle(point, Vec3(A[0], A[1], A[2]), Vec3(B[0], B[1], B[2]), Vec3(C[0], C[1], C[2]));
             const double dq = (q.point - point).squaredNorm();
+            const Index f = m_order[static_cast<std::size_t>(-1 - node.child[k])];
             if (dq < best_d2 || (dq == best_d2 && f < best.face)) {
                 best_d2 = dq;
                 threshold = detail::float_threshold(best_d2);
@@ -504,12 +615,16 @@ AabbTree::Nearest AabbTree::nearest(CRef<Positions> vertices, const Vec3& point,
                 best.barycentric = q.barycentric;
             }
         }
-        for (int i = n; i-- > 0;) {
-            const Index c = node.child[order[i]];
-            if (c < 0)
-                continue;
-            stack[top] = c;
-            stack_d2[top++] = d2[order[i]];
+        for (int m = mask & ~node.face_mask; m != 0;) {
+            int far = __builtin_ctz(static_cast<unsigned>(m));
+            for (int rest = m & (m - 1); rest != 0; rest &= rest - 1) {
+                const int k = __builtin_ctz(static_cast<unsigned>(rest));
+                if (d2[k] > d2[far])
+                    far = k;
+            }
+            stack[top] = node.child[far];
+            stack_d2[top++] = d2[far];
+            m &= ~(1 << far);
         }
     }
     if (best.face < 0) // a bound below the true distance (an invalid hint): search again without it

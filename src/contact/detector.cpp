@@ -38,6 +38,22 @@ std::vector<ContactPoint> run_detection(const std::vector<ContactSurface>& surfa
             blocks.push_back({k, b, std::min(n, b + VERTEX_BLOCK)});
     }
 
+    if (contact_data) { // the depth searches skip faces by their planes: bring those up to date
+        std::vector<Index> others;
+        for (const PairCandidates& c : candidates)
+            if (!c.vertices.empty())
+                others.push_back(c.other);
+        std::sort(others.begin(), others.end());
+        others.erase(std::unique(others.begin(), others.end()), others.end());
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, others.size(), 1),
+                          [&](const tbb::blocked_range<std::size_t>& r) {
+                              for (std::size_t i = r.begin(); i < r.end(); ++i) {
+                                  const ContactSurface& s = surfaces[static_cast<std::size_t>(others[i])];
+                                  s.tree.update_planes(s.vertices);
+                              }
+                          });
+    }
+
     tbb::enumerable_thread_specific<std::vector<ContactPoint>> local_points;
     tbb::enumerable_thread_specific<DetectionStats> local_stats;
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, blocks.size(), 1),
@@ -78,16 +94,27 @@ std::vector<ContactPoint> run_detection(const std::vector<ContactSurface>& surfa
                           }
                       });
 
-    std::vector<ContactPoint> points;
+    // Sorted by (body, vertex, other), which is unique per point: small keys are sorted, the
+    // points moved once.
+    struct Key {
+        Index body, vertex, other;
+        const ContactPoint* point;
+    };
+    std::vector<Key> keys;
     std::size_t total = 0;
     for (const auto& part : local_points)
         total += part.size();
-    points.reserve(total);
+    keys.reserve(total);
     for (const auto& part : local_points)
-        points.insert(points.end(), part.begin(), part.end());
-    std::sort(points.begin(), points.end(), [](const ContactPoint& a, const ContactPoint& b) {
+        for (const ContactPoint& c : part)
+            keys.push_back({c.body, c.vertex, c.other, &c});
+    std::sort(keys.begin(), keys.end(), [](const Key& a, const Key& b) {
         return std::tie(a.body, a.vertex, a.other) < std::tie(b.body, b.vertex, b.other);
     });
+    std::vector<ContactPoint> points;
+    points.reserve(total);
+    for (const Key& k : keys)
+        points.push_back(*k.point);
     if (stats) {
         DetectionStats sum;
         sum.pairs = pairs;

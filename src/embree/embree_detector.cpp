@@ -84,19 +84,14 @@ InsideTest EmbreeScenes::inside_test(Index s, const Vec3& point) const
 }
 
 std::vector<ContactPoint> detect_contacts_embree(const std::vector<ContactSurface>& surfaces,
-                                                 const EmbreeScenes& scenes, const DetectionSettings& /*settings*/,
+                                                 const EmbreeScenes& scenes, const DetectionSettings& settings,
                                                  DetectionStats* stats)
 {
     // The contact library's pipeline (broad phase, mid phase, depth and normal, sorted output,
     // stats) with Embree's axis rays for the inside decision; Embree always searches the whole
-    // surface, as exact mode does, so the settings' mode and tolerances do not apply.
-    return detect_contacts(
-        surfaces,
-        [&](Index other, const Vec3& p) {
-            return detail::inside_from_axes(surfaces[static_cast<std::size_t>(other)], p,
-                                            [&](int axis) { return scenes.axis_test(other, p, axis); });
-        },
-        stats);
+    // surface, as exact mode does, so the settings' mode and tolerances do not apply (their
+    // contact_data does).
+    return detail::detect_contacts_embree(surfaces, scenes.m_impl->scenes, settings, stats, nullptr);
 }
 
 std::vector<Disagreement> cross_check(const std::vector<ContactPoint>& axis_ray,

@@ -119,8 +119,16 @@ void Simulation::dynamic_step(RunSummary& summary)
         return;
     }
     for (Body& body : m_scene.bodies) {
-        const PcgResult result = implicit_euler_step(body, m_spec.simulation.dt, m_spec.simulation.gravity,
-                                                     settings, summary.phases);
+        PcgResult result;
+        try {
+            result = implicit_euler_step(body, m_spec.simulation.dt, m_spec.simulation.gravity, settings,
+                                         summary.phases);
+        } catch (const NumericalError& error) {
+            const std::string what = error.what();
+            if (what.rfind("body '", 0) == 0)
+                throw;
+            CORO_THROW(NumericalError, "body '" << body.name() << "': " << what);
+        }
         ++summary.solves;
         summary.cg_iterations_mean += result.iterations;
         summary.cg_residual_mean += result.residual;
@@ -133,9 +141,16 @@ void Simulation::static_step(Index load_step, RunSummary& summary)
     const PcgSettings settings = pcg_settings(m_spec.solver);
     const double factor = static_cast<double>(load_step) / m_spec.simulation.load_steps;
     for (Body& body : m_scene.bodies) {
-        const StaticResult result =
-            solve_static(body, factor, m_spec.simulation.gravity, settings, m_spec.solver.static_tolerance,
-                         m_spec.solver.static_max_iterations, summary.phases);
+        StaticResult result;
+        try {
+            result = solve_static(body, factor, m_spec.simulation.gravity, settings, m_spec.solver.static_tolerance,
+                                  m_spec.solver.static_max_iterations, summary.phases);
+        } catch (const NumericalError& error) {
+            const std::string what = error.what();
+            if (what.rfind("body '", 0) == 0)
+                throw;
+            CORO_THROW(NumericalError, "body '" << body.name() << "': " << what);
+        }
         ++summary.solves;
         summary.cg_iterations_mean += result.cg_iterations;
         summary.cg_residual_mean += result.residual;
@@ -200,7 +215,10 @@ RunSummary Simulation::run(Index steps, const FrameCallback& on_frame, const Pro
             m_divergence.check(m_scene.bodies);
             detect(summary);
         } catch (const NumericalError& error) {
-            CORO_THROW(NumericalError, "step " << step << " (t = " << time_of(step) << "): " << error.what());
+            // Solvers name what failed; add where the first NaN/Inf is, in mesh file numbering.
+            const std::string where = locate_non_finite(m_scene.bodies);
+            CORO_THROW(NumericalError, "step " << step << " (t = " << time_of(step) << "): " << error.what()
+                                               << (where.empty() ? "" : "; first non-finite value: " + where));
         }
         summary.steps = step;
         if (stop_requested())

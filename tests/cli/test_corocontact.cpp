@@ -126,6 +126,7 @@ TEST(CorocontactRun, DivergenceExitsWithThreeAndKeepsReadableFrames)
     const Outcome outcome = run("run " + case_file.string() + " --out " + (dir / "out").string(), dir);
     EXPECT_EQ(outcome.exit_code, 3);
     EXPECT_THAT(outcome.err, HasSubstr("step 1"));
+    EXPECT_THAT(outcome.err, HasSubstr("body 'block': ")); // which body's solve met the Inf
     const std::vector<std::string> frames = listed_frames(dir / "out" / "diverge.pvd");
     ASSERT_EQ(frames.size(), 1u);
     vtkNew<vtkXMLMultiBlockDataReader> reader;

@@ -261,9 +261,23 @@ TEST(AabbTree, NearestIsTheBruteForceMinimumWithSmallestFaceOnTies)
     // distance, face index): deep points inside a sphere (many faces nearly equally far, where
     // box and plane bounds prune hardest), points near the surface, and points of a structured
     // box on its grid planes (exact ties between faces).
+    // Each surface is queried without face planes, with them (update_planes), and after a refit
+    // to deformed positions (planes out of date again, then updated).
     std::mt19937 rng(12);
+    std::vector<ContactSurface> cases;
     for (const ContactSurface& s : {surface_of(make_sphere(Vec3(0.1, -0.2, 0.05), 1.0, 10), "sphere"),
                                     surface_of(make_box(Vec3(0, 0, 0), Vec3(1, 2, 1), {3, 6, 3}), "box")}) {
+        cases.push_back(s);
+        cases.push_back(s);
+        cases.back().tree.update_planes(cases.back().vertices);
+        cases.push_back(s);
+        cases.back().tree.update_planes(cases.back().vertices);
+        cases.back().vertices = deform(cases.back().vertices, rng);
+        cases.back().tree.refit(cases.back().vertices);
+        cases.push_back(cases.back());
+        cases.back().tree.update_planes(cases.back().vertices);
+    }
+    for (const ContactSurface& s : cases) {
         const Aabb box = s.tree.bounds();
         for (int q = 0; q < 300; ++q) {
             Vec3 p = random_point(box.min.array() - 0.2, box.max.array() + 0.2, rng);
@@ -288,5 +302,34 @@ TEST(AabbTree, NearestIsTheBruteForceMinimumWithSmallestFaceOnTies)
             ASSERT_EQ(got.face, best_face) << s.name << " query " << q;
             ASSERT_EQ(got.distance, std::sqrt(best)) << s.name << " query " << q;
         }
+    }
+}
+
+TEST(AabbTree, NearestWithPlanesOfALargeTreeEqualsBruteForce)
+{
+    // Enough nodes for update_planes' parallel path; deep and shallow points.
+    std::mt19937 rng(13);
+    ContactSurface s = surface_of(make_sphere(Vec3(0.0, 0.0, 0.0), 1.0, 24), "large sphere");
+    s.vertices = deform(s.vertices, rng);
+    s.tree.refit(s.vertices);
+    ASSERT_GT(s.faces.rows(), 6000);
+    tbb::task_arena(2).execute([&] { s.tree.update_planes(s.vertices); });
+    for (int q = 0; q < 60; ++q) {
+        const Vec3 p = random_point(Vec3::Constant(q % 2 == 0 ? -0.3 : -1.2), Vec3::Constant(q % 2 == 0 ? 0.3 : 1.2), rng);
+        double best = std::numeric_limits<double>::infinity();
+        Index best_face = -1;
+        for (Index f = 0; f < s.faces.rows(); ++f) {
+            const TrianglePoint t = closest_point_on_triangle(p, s.vertices.row(s.faces(f, 0)).transpose(),
+                                                              s.vertices.row(s.faces(f, 1)).transpose(),
+                                                              s.vertices.row(s.faces(f, 2)).transpose());
+            const double d2 = (t.point - p).squaredNorm();
+            if (d2 < best) {
+                best = d2;
+                best_face = f;
+            }
+        }
+        const AabbTree::Nearest got = s.tree.nearest(s.vertices, p);
+        ASSERT_EQ(got.face, best_face) << "query " << q;
+        ASSERT_EQ(got.distance, std::sqrt(best)) << "query " << q;
     }
 }

@@ -605,6 +605,21 @@ TEST(ReadMsh, RejectsHeaderDeclaringMoreNodesThanTheFileHolds)
                 input_error_at(elements, 9, "expected element 1 of 4294967296 declared at line 8"));
 }
 
+TEST(ReadMsh, RejectsHugeCountsWithAnInputErrorNotAnAllocationFailure)
+{
+    // Reserving 2^62 nodes or elements would throw std::length_error or std::bad_alloc.
+    const fs::path nodes = write_msh("huge_nodes.msh",
+                                     V22_HEADER + "$Nodes\n4611686018427387904\n1 0 0 0\n");
+    EXPECT_THAT([&] { read_msh(nodes); },
+                input_error_at(nodes, 6, "expected node 2 of 4611686018427387904"));
+    const fs::path elements =
+        write_msh("huge_elements.msh", V41_HEADER + "$Nodes\n0 0 0 0\n$EndNodes\n$Elements\n"
+                                                    "1 4611686018427387904 1 1\n"
+                                                    "3 1 4 4611686018427387904\n");
+    EXPECT_THAT([&] { read_msh(elements); },
+                input_error_at(elements, 9, "expected element 1 of 4611686018427387904"));
+}
+
 TEST(ReadMsh, RejectsCountBeyondSixtyFourBits)
 {
     const fs::path path =

@@ -93,7 +93,8 @@ TEST(ReadVtkMesh, RejectsTruncatedLegacyQuietly)
     const std::string bytes = bytes_of(data_dir() / "vtk" / "cube_gmsh.vtk");
     const fs::path path =
         test::write_text(scratch() / "truncated.vtk", bytes.substr(0, bytes.size() / 2));
-    expect_quiet_error(path, "VTK could not read the file");
+    expect_quiet_error(path, "truncated.vtk:83: cell 178 of the CELLS list: expected point 3 of 3, "
+                             "found the end of the data");
 }
 
 TEST(ReadVtkMesh, RejectsDeclaredCountsBeyondTheFileBeforeVtkAllocates)
@@ -108,6 +109,43 @@ TEST(ReadVtkMesh, RejectsDeclaredCountsBeyondTheFileBeforeVtkAllocates)
     const fs::path xml_path = test::write_text(scratch() / "huge.vtu", xml);
     EXPECT_THAT([&] { read_tet_mesh(xml_path); },
                 error_about(xml_path, "declares NumberOfPoints = 7600000000000"));
+}
+
+// Found by mutation fuzzing: VTK 9.1 unpacks legacy cells without checking their counts
+// (heap corruption), and takes 5.1 offsets as they come (a huge cell).
+TEST(ReadVtkMesh, RejectsLegacyCellCountOverrunningTheListQuietly)
+{
+    std::string bytes = bytes_of(data_dir() / "vtk" / "cube_gmsh.vtk");
+    bytes.replace(bytes.find("\n4 72 0 45 24\n"), 14, "\n24\n");
+    const fs::path path = test::write_text(scratch() / "overrun.vtk", bytes);
+    expect_quiet_error(path, "overrun.vtk:83: cell 349 declares 53 points, more than the 21 "
+                             "integers left of the 1588 CELLS declares");
+}
+
+TEST(ReadVtkMesh, RejectsInconsistentOffsetsQuietly)
+{
+    const fs::path path = data_dir() / "bad" / "vtk_fuzz_bad_offsets.vtk";
+    expect_quiet_error(path, "the cell list is inconsistent");
+}
+
+TEST(ReadVtkMesh, RejectsCellTypeCountDifferentFromCellCount)
+{
+    std::string bytes = bytes_of(data_dir() / "vtk" / "cube_gmsh.vtk");
+    bytes.replace(bytes.find("CELL_TYPES 368"), 14, "CELL_TYPES 367");
+    const fs::path path = test::write_text(scratch() / "types.vtk", bytes);
+    expect_quiet_error(path, "types.vtk:453: expected CELL_TYPES to declare as many cells as CELLS "
+                             "at line 83");
+}
+
+// Found by mutation fuzzing: VTK 9.1 sizes a vector from a compressed array's block count
+// before reading anything, so a corrupt count stalls the reader for minutes.
+TEST(ReadVtkMesh, RejectsCorruptCompressionHeaderQuickly)
+{
+    std::string bytes = bytes_of(data_dir() / "vtk" / "cube_appended.vtu");
+    bytes.replace(bytes.find("_AQAAAACAAAA"), 12, "_////AACAAAA");
+    const fs::path path = test::write_text(scratch() / "blocks.vtu", bytes);
+    expect_quiet_error(path, "blocks.vtu:10: the compressed data of this DataArray declares "
+                             "16777215 blocks");
 }
 
 TEST(ReadVtkMesh, RejectsGridWithoutTets)

@@ -40,6 +40,14 @@ public:
     /// children, so the result does not depend on the thread count.
     void refit(CRef<Positions> vertices);
 
+    /// Computes the face planes and node slabs that let nearest() skip faces and subtrees by
+    /// their distance along a normal, for the
+    /// positions of the last build or refit (which leave them out of date: nearest() is exact
+    /// either way, only slower without them). A cache: const, but not to be called concurrently
+    /// with other queries on the same tree. Large trees compute them in parallel tasks.
+    /// @param[in] vertices  the positions the tree was last built or refit with
+    void update_planes(CRef<Positions> vertices) const;
+
     /// Box of the whole surface (empty for an empty tree).
     const Aabb& bounds() const;
     Index num_faces() const { return static_cast<Index>(m_faces.rows()); }
@@ -60,7 +68,7 @@ public:
     /// The face boxes are the bounding rectangles of Eq. 4 (closed here, grown by `tolerance`).
     /// `visit` either returns void (every such face is visited) or a double, the largest
     /// distance along the axis still of interest: subtrees whose boxes lie farther than the
-    /// smallest value returned so far from `point` along the axis are skipped. Children are
+    /// smallest value returned so far from `point` along the axis are skipped. Child nodes are
     /// visited nearer first; the order depends only on the tree and `point` (deterministic).
     template <class Visit>
     void faces_on_axis_line(const Vec3& point, int axis, double tolerance, Visit&& visit) const;
@@ -100,12 +108,6 @@ private:
     struct alignas(64) WideNode {
         float lo[3][4]; ///< [coordinate][child] box minimum
         float hi[3][4]; ///< [coordinate][child] box maximum
-        /// Face children: unit normal u, offset u·A and slack s such that every point x of the
-        /// face has |u·x − offset| ≤ s (s = +∞ for a degenerate face; node children: +∞), so
-        /// (|u·p − offset| − s)/|u| bounds the face's distance to p from below.
-        float normal[3][4];
-        float offset[4];
-        float slack[4];
         Index child[4]; ///< ≥ 0: node index; < 0: the face in slot −1 − child of m_order
         Index count;    ///< children used (2..4; 1 only for a one-face tree), lanes 0..count−1
         Index face_mask; ///< bit k set: child k is a face
@@ -115,13 +117,25 @@ private:
     Index build_node(const std::vector<Vec3>& centroids, Index begin, Index end, int depth);
     void refit_range(const double* data, std::ptrdiff_t stride, Index first, Index last);
     void refit_node(const double* data, std::ptrdiff_t stride, Index n);
-    static void face_plane(const double* A, const double* B, const double* C, WideNode& w, int k);
+    /// The planes of a node's children: unit normal u, offset and slack s such that every point
+    /// x of the child (a face, or the faces of a child node) has |u·x − offset| ≤ s (s = +∞ for
+    /// a degenerate face or a child whose faces' normals nearly cancel), so
+    /// (|u·p − offset| − s)/|u| bounds the child's distance to p from below.
+    struct alignas(16) FacePlanes {
+        float normal[3][4];
+        float offset[4];
+        float slack[4];
+    };
+    static void face_plane(const double* A, const double* B, const double* C, FacePlanes& w, int k);
 
     std::vector<WideNode> m_nodes;  // root at 0; every subtree is a contiguous range after its root
     std::vector<Aabb> m_node_boxes; // exact box of each node (union of its children's)
     std::vector<Index> m_subtree_end; // one past the last node of each node's subtree
+    std::vector<Index> m_node_slots;  // 2 per node: the range of slots (faces) of its subtree
     std::vector<Index> m_task_roots;  // parallel refit: roots of the subtrees refit as tasks
     std::vector<Index> m_order;       // face of each slot, in leaf order
+    mutable std::vector<FacePlanes> m_planes; // per node; a cache filled by update_planes
+    mutable bool m_planes_current = false;    // m_planes match the positions of the last refit
     std::vector<Aabb> m_face_boxes;   // exact box of the face in each slot, refit with the nodes
     std::vector<Index> m_slot_vertices; // 3 per slot: the vertices of the face in that slot
     Aabb m_bounds;
@@ -193,28 +207,16 @@ void AabbTree::faces_on_axis_line(const Vec3& point, int axis, double tolerance,
         if (mask == 0)
             continue;
         _mm_store_ps(gaps, gap);
-        // Faces now (nearer first), then child nodes pushed farther first (nearer on top).
-        int order[4];
-        int n = 0;
-        for (int k = 0; k < 4; ++k)
-            if (mask & (1 << k)) {
-                int j = n++;
-                while (j > 0 && gaps[order[j - 1]] > gaps[k]) {
-                    order[j] = order[j - 1];
-                    --j;
-                }
-                order[j] = k;
-            }
-        for (int i = 0; i < n; ++i) {
-            const Index c = node.child[order[i]];
-            if (c >= 0)
-                continue;
-            const std::size_t slot = static_cast<std::size_t>(-1 - c);
+        // The node's faces now, in lane order; then its child nodes, pushed farther first so
+        // that the nearer ones are visited first.
+        for (int m = mask & node.face_mask; m != 0; m &= m - 1) {
+            const int k = __builtin_ctz(static_cast<unsigned>(m));
+            const std::size_t slot = static_cast<std::size_t>(-1 - node.child[k]);
             const Aabb& fb = m_face_boxes[slot]; // the exact test
             if (pu < fb.min[u] - tolerance || pu > fb.max[u] + tolerance || pv < fb.min[v] - tolerance ||
                 pv > fb.max[v] + tolerance)
                 continue;
-            if (static_cast<double>(gaps[order[i]]) > cutoff * (1.0 + 0x1p-20))
+            if (static_cast<double>(gaps[k]) > cutoff * (1.0 + 0x1p-20))
                 continue;
             const Index face = m_order[slot];
             if constexpr (std::is_void_v<decltype(visit(face))>) {
@@ -227,12 +229,16 @@ void AabbTree::faces_on_axis_line(const Vec3& point, int axis, double tolerance,
                 }
             }
         }
-        for (int i = n; i-- > 0;) {
-            const Index c = node.child[order[i]];
-            if (c < 0)
-                continue;
-            stack[top] = c;
-            stack_gap[top++] = gaps[order[i]];
+        for (int m = mask & ~node.face_mask; m != 0;) {
+            int far = __builtin_ctz(static_cast<unsigned>(m));
+            for (int rest = m & (m - 1); rest != 0; rest &= rest - 1) {
+                const int k = __builtin_ctz(static_cast<unsigned>(rest));
+                if (gaps[k] > gaps[far])
+                    far = k;
+            }
+            stack[top] = node.child[far];
+            stack_gap[top++] = gaps[far];
+            m &= ~(1 << far);
         }
     }
 }

@@ -38,9 +38,15 @@ private:
     struct Impl;
     std::unique_ptr<Impl> m_impl;
     const std::vector<ContactSurface>* m_surfaces = nullptr;
+
+    friend std::vector<ContactPoint> detect_contacts_embree(const std::vector<ContactSurface>& surfaces,
+                                                            const EmbreeScenes& scenes,
+                                                            const DetectionSettings& settings, DetectionStats* stats);
 };
 
-/// Detection with Embree as the narrow-phase backend (same broad and mid phase, same output).
+/// Detection with Embree as the narrow-phase backend (same broad and mid phase, same output;
+/// depth and normal only with settings.contact_data; an inside vertex's depth search starts from
+/// the deciding Embree hit, as the axis-ray test's does from its crossing).
 std::vector<ContactPoint> detect_contacts_embree(const std::vector<ContactSurface>& surfaces,
                                                  const EmbreeScenes& scenes, const DetectionSettings& settings,
                                                  DetectionStats* stats = nullptr);

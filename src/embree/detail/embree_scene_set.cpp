@@ -431,6 +431,12 @@ void EmbreeSceneSet::update(const std::vector<ContactSurface>& surfaces)
 
 AxisOutcome EmbreeSceneSet::axis_test(Index s, const Vec3& point, int axis, EmbreeQueryCounts* counts) const
 {
+    return axis_test(s, point, axis, counts, nullptr);
+}
+
+AxisOutcome EmbreeSceneSet::axis_test(Index s, const Vec3& point, int axis, EmbreeQueryCounts* counts,
+                                      double* distance_bound) const
+{
     CORO_ASSERT(s >= 0 && s < size() && axis >= 0 && axis < 3);
     const SurfaceScene& scene = m_impl->scenes[static_cast<std::size_t>(s)];
     if (counts != nullptr)
@@ -467,6 +473,8 @@ AxisOutcome EmbreeSceneSet::axis_test(Index s, const Vec3& point, int axis, Embr
     const Hit& hit = hits[closest];
     // Magnitude of the float coordinates and distances involved in this ray's hits.
     const double magnitude = static_cast<double>(scene.scale) + lead;
+    if (distance_bound != nullptr) // the hit is a surface point, up to float noise
+        *distance_bound = closest_distance + 4.0 * T_BAND * magnitude;
     if (closest_distance <= T_BAND * magnitude)
         return AxisOutcome::ON_SURFACE; // the point lies on the surface (within float precision)
     std::size_t coinciding = 0;
@@ -490,7 +498,16 @@ AxisOutcome EmbreeSceneSet::axis_test(Index s, const Vec3& point, int axis, Embr
 InsideTest EmbreeSceneSet::inside_test(const ContactSurface& surface, Index s, const Vec3& point,
                                        EmbreeQueryCounts* counts) const
 {
-    return inside_from_axes(surface, point, [&](int axis) { return axis_test(s, point, axis, counts); });
+    // The deciding axis's closest hit bounds the depth from above (as the axis-ray test's
+    // crossing does), so the nearest-point search of the depth starts from it. A bound that float
+    // noise made too small only costs a second search (AabbTree::nearest), never the answer.
+    double bounds[3] = {std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity(),
+                        std::numeric_limits<double>::infinity()};
+    InsideTest result = inside_from_axes(
+        surface, point, [&](int axis) { return axis_test(s, point, axis, counts, &bounds[axis]); });
+    if (result.inside && result.deciding_axis >= 0 && result.deciding_axis < 3)
+        result.surface_distance_bound = bounds[result.deciding_axis];
+    return result;
 }
 
 EmbreeFirstHit EmbreeSceneSet::first_hit(Index s, const Vec3& point, int axis) const

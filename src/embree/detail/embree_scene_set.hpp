@@ -104,7 +104,14 @@ public:
     /// See EmbreeScenes::axis_test. `counts` (optional) is incremented.
     AxisOutcome axis_test(Index s, const Vec3& point, int axis, EmbreeQueryCounts* counts = nullptr) const;
 
-    /// See EmbreeScenes::inside_test; `surface` must be the one scene `s` was built from.
+    /// axis_test that also gives, when the axis has a hit, a distance within which the surface
+    /// lies from `point` (the closest hit's distance plus its float noise band).
+    AxisOutcome axis_test(Index s, const Vec3& point, int axis, EmbreeQueryCounts* counts,
+                          double* distance_bound) const;
+
+    /// See EmbreeScenes::inside_test; `surface` must be the one scene `s` was built from. An
+    /// inside vertex decided by an axis carries that axis's closest hit distance (plus its float
+    /// noise band) as surface_distance_bound, for the depth search.
     InsideTest inside_test(const ContactSurface& surface, Index s, const Vec3& point,
                            EmbreeQueryCounts* counts = nullptr) const;
 
