@@ -1,5 +1,7 @@
 #include <corocontact/fem/corotational_fem.hpp>
 
+#include "detail/tet_block_kernel.hpp"
+
 #include <corocontact/core/error.hpp>
 #include <corocontact/fem/corotation.hpp>
 #include <corocontact/partition/element_loop.hpp>
@@ -11,6 +13,8 @@
 #include <cstdint>
 #include <cmath>
 #include <numeric>
+#include <stdexcept>
+#include <string>
 
 namespace coro {
 
@@ -235,28 +239,10 @@ void CorotationalFem::part_pass(Index part, const Pass& pass)
             const Mat34 lg = (s * m_lambda) * rg, mg = (s * m_mu) * rg;
             const auto& targets = m_block_targets[at(t)];
             const unsigned transposed = m_block_transposed[at(t)];
-            for (std::size_t pair = 0; pair < TET_BLOCK_PAIRS.size(); ++pair) {
-                const int i = TET_BLOCK_PAIRS[pair][0], j = TET_BLOCK_PAIRS[pair][1];
-                const double* gi = rg.col(i).data();
-                const double* gj = rg.col(j).data();
-                const double* li = lg.col(i).data();
-                const double* mj = mg.col(j).data();
-                const double d = mj[0] * gi[0] + mj[1] * gi[1] + mj[2] * gi[2];
-                double* kij = block_slot(targets[pair]);
-                if ((transposed >> pair) & 1u) {
-                    kij[0] += li[0] * gj[0] + mj[0] * gi[0] + d, kij[1] += li[1] * gj[0] + mj[1] * gi[0];
-                    kij[2] += li[2] * gj[0] + mj[2] * gi[0], kij[3] += li[0] * gj[1] + mj[0] * gi[1];
-                    kij[4] += li[1] * gj[1] + mj[1] * gi[1] + d, kij[5] += li[2] * gj[1] + mj[2] * gi[1];
-                    kij[6] += li[0] * gj[2] + mj[0] * gi[2], kij[7] += li[1] * gj[2] + mj[1] * gi[2];
-                    kij[8] += li[2] * gj[2] + mj[2] * gi[2] + d;
-                } else {
-                    kij[0] += li[0] * gj[0] + mj[0] * gi[0] + d, kij[1] += li[0] * gj[1] + mj[0] * gi[1];
-                    kij[2] += li[0] * gj[2] + mj[0] * gi[2], kij[3] += li[1] * gj[0] + mj[1] * gi[0];
-                    kij[4] += li[1] * gj[1] + mj[1] * gi[1] + d, kij[5] += li[1] * gj[2] + mj[1] * gi[2];
-                    kij[6] += li[2] * gj[0] + mj[2] * gi[0], kij[7] += li[2] * gj[1] + mj[2] * gi[1];
-                    kij[8] += li[2] * gj[2] + mj[2] * gi[2] + d;
-                }
-            }
+            const detail::PaddedColumns padded_g(rg), padded_l(lg), padded_m(mg);
+            for (std::size_t pair = 0; pair < TET_BLOCK_PAIRS.size(); ++pair)
+                detail::add_tet_block(block_slot(targets[pair]), TET_BLOCK_PAIRS[pair][0], TET_BLOCK_PAIRS[pair][1],
+                                      ((transposed >> pair) & 1u) != 0, rg, lg, mg, padded_g, padded_l, padded_m);
         }
     }
 }
@@ -314,6 +300,14 @@ void CorotationalFem::project_fixed(const std::vector<char>& fixed, BsrMatrix& m
                                       matrix.block(k).setZero();
                               }
                       });
+}
+
+void CorotationalFem::set_rotations(std::vector<Mat3> rotations)
+{
+    if (static_cast<Index>(rotations.size()) != num_tets())
+        throw std::invalid_argument("CorotationalFem::set_rotations: " + std::to_string(rotations.size()) +
+                                    " rotations for " + std::to_string(num_tets()) + " tets");
+    m_rotations = std::move(rotations);
 }
 
 void CorotationalFem::update_rotations(CRef<VecX> x)

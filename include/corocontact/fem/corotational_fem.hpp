@@ -55,6 +55,12 @@ public:
     /// Current element rotations (identity before the first update), #T.
     const std::vector<Mat3>& rotations() const { return m_rotations; }
 
+    /// Replaces the element rotations, e.g. from a checkpoint: the next update_rotations()
+    /// starts its polar iteration from them.
+    /// @param[in] rotations  #T rotations, in this object's tet order
+    /// @throws std::invalid_argument if the count is not #T
+    void set_rotations(std::vector<Mat3> rotations);
+
     /// Internal forces f = f0 − K'x = −Σ_e R_e K_e (R_eᵀ x_e − X_e) with the current rotations.
     /// @param[in] x   #3V positions [m]
     /// @param[out] f  #3V forces [N]; contiguous, must not alias x
