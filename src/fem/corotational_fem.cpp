@@ -1,5 +1,7 @@
 #include <corocontact/fem/corotational_fem.hpp>
 
+#include "detail/tet_block_kernel.hpp"
+
 #include <corocontact/core/error.hpp>
 #include <corocontact/fem/corotation.hpp>
 #include <corocontact/partition/element_loop.hpp>
@@ -8,14 +10,21 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <cstdint>
 #include <cmath>
 #include <numeric>
+#include <stdexcept>
+#include <string>
 
 namespace coro {
 
 namespace {
 constexpr Index TET_GRAIN = 1024;
 constexpr Index ROW_GRAIN = 256;
+
+// The 10 blocks (i, j), i ≤ j, of a tet's symmetric 4×4 block matrix, in target order.
+constexpr std::array<std::array<int, 2>, 10> TET_BLOCK_PAIRS{
+    {{0, 0}, {0, 1}, {0, 2}, {0, 3}, {1, 1}, {1, 2}, {1, 3}, {2, 2}, {2, 3}, {3, 3}}};
 
 std::size_t at(Index i) { return static_cast<std::size_t>(i); }
 
@@ -77,14 +86,15 @@ CorotationalFem::CorotationalFem(const TetMesh& mesh, const Material& material, 
             m_masses[m_tets(t, a)] += material.density * rest.volume / 4.0;
     }
 
-    // Block pattern: node r couples with every node sharing a tet (and itself).
+    // Block pattern, upper storage: node r couples with every node c ≥ r sharing a tet (and itself).
     std::vector<std::vector<Index>> neighbours(at(n_vertices));
     for (Index v = 0; v < n_vertices; ++v)
         neighbours[at(v)].push_back(v);
     for (Index t = 0; t < n_tets; ++t)
         for (int a = 0; a < 4; ++a)
             for (int b = 0; b < 4; ++b)
-                neighbours[at(m_tets(t, a))].push_back(m_tets(t, b));
+                if (m_tets(t, b) > m_tets(t, a))
+                    neighbours[at(m_tets(t, a))].push_back(m_tets(t, b));
     m_row_offsets.assign(at(n_vertices) + 1, 0);
     for (Index r = 0; r < n_vertices; ++r) {
         auto& row = neighbours[at(r)];
@@ -106,33 +116,42 @@ CorotationalFem::CorotationalFem(const TetMesh& mesh, const Material& material, 
     std::vector<Index> block_entry(m_columns.size(), -1), node_entry(at(n_vertices), -1);
     std::vector<std::pair<Index, Index>> block_pairs, force_pairs; // (block or node, entry)
     Index n_block_entries = 0, n_force_entries = 0;
+    m_block_transposed.assign(at(n_tets), 0);
     for (Index p = 0; p < parts; ++p) {
         std::vector<Index> touched_blocks, touched_nodes;
-        for (Index t = m_layout.tet_offsets[at(p)]; t < m_layout.tet_offsets[at(p) + 1]; ++t)
+        for (Index t = m_layout.tet_offsets[at(p)]; t < m_layout.tet_offsets[at(p) + 1]; ++t) {
             for (int i = 0; i < 4; ++i) {
-                const Index row = m_tets(t, i);
-                if (row < first_interface) {
-                    m_force_targets[at(t)][at(i)] = row;
-                    for (int j = 0; j < 4; ++j)
-                        m_block_targets[at(t)][at(4 * i + j)] = pattern.find(row, m_tets(t, j));
+                const Index node = m_tets(t, i);
+                if (node < first_interface) {
+                    m_force_targets[at(t)][at(i)] = node;
                     continue;
                 }
-                if (node_entry[at(row)] < 0) {
-                    node_entry[at(row)] = n_force_entries++;
-                    touched_nodes.push_back(row);
-                    force_pairs.emplace_back(row - first_interface, node_entry[at(row)]);
+                if (node_entry[at(node)] < 0) {
+                    node_entry[at(node)] = n_force_entries++;
+                    touched_nodes.push_back(node);
+                    force_pairs.emplace_back(node - first_interface, node_entry[at(node)]);
                 }
-                m_force_targets[at(t)][at(i)] = -1 - node_entry[at(row)];
-                for (int j = 0; j < 4; ++j) {
-                    const Index k = pattern.find(row, m_tets(t, j));
-                    if (block_entry[at(k)] < 0) {
-                        block_entry[at(k)] = n_block_entries++;
-                        touched_blocks.push_back(k);
-                        block_pairs.emplace_back(k, block_entry[at(k)]);
-                    }
-                    m_block_targets[at(t)][at(4 * i + j)] = -1 - block_entry[at(k)];
-                }
+                m_force_targets[at(t)][at(i)] = -1 - node_entry[at(node)];
             }
+            // Block (i, j) is stored at (min, max) of the two nodes, transposed if node i > node j;
+            // its row is interior (written by this part) or an interface row (buffered).
+            for (std::size_t pair = 0; pair < TET_BLOCK_PAIRS.size(); ++pair) {
+                const Index ni = m_tets(t, TET_BLOCK_PAIRS[pair][0]), nj = m_tets(t, TET_BLOCK_PAIRS[pair][1]);
+                const Index row = std::min(ni, nj), k = pattern.find(row, std::max(ni, nj));
+                if (ni > nj)
+                    m_block_transposed[at(t)] |= static_cast<std::uint16_t>(1u << pair);
+                if (row < first_interface) {
+                    m_block_targets[at(t)][pair] = k;
+                    continue;
+                }
+                if (block_entry[at(k)] < 0) {
+                    block_entry[at(k)] = n_block_entries++;
+                    touched_blocks.push_back(k);
+                    block_pairs.emplace_back(k, block_entry[at(k)]);
+                }
+                m_block_targets[at(t)][pair] = -1 - block_entry[at(k)];
+            }
+        }
         for (const Index k : touched_blocks)
             block_entry[at(k)] = -1;
         for (const Index v : touched_nodes)
@@ -214,32 +233,16 @@ void CorotationalFem::part_pass(Index part, const Pass& pass)
         if (values) {
             // K'_ij = s V (λ G_i G_jᵀ + μ G_j G_iᵀ + μ (G_i·G_j) I); entry (a, b) is
             // λG_i[a]·G_j[b] + μG_j[a]·G_i[b] (+ the diagonal term): two products per entry
-            // with the gradients pre-scaled. K'_ji = K'_ijᵀ is added from the same numbers.
+            // with the gradients pre-scaled. Only i ≤ j is formed: the matrix keeps its upper
+            // blocks, K'_ij at (node i, node j), or K'_ijᵀ when node i is the larger.
             const double s = pass.stiffness_scale * volume;
             const Mat34 lg = (s * m_lambda) * rg, mg = (s * m_mu) * rg;
             const auto& targets = m_block_targets[at(t)];
-            for (int i = 0; i < 4; ++i)
-                for (int j = i; j < 4; ++j) {
-                    const double* gi = rg.col(i).data();
-                    const double* gj = rg.col(j).data();
-                    const double* li = lg.col(i).data();
-                    const double* mj = mg.col(j).data();
-                    const double d = mj[0] * gi[0] + mj[1] * gi[1] + mj[2] * gi[2];
-                    const double k[9] = {li[0] * gj[0] + mj[0] * gi[0] + d, li[0] * gj[1] + mj[0] * gi[1],
-                                         li[0] * gj[2] + mj[0] * gi[2],     li[1] * gj[0] + mj[1] * gi[0],
-                                         li[1] * gj[1] + mj[1] * gi[1] + d, li[1] * gj[2] + mj[1] * gi[2],
-                                         li[2] * gj[0] + mj[2] * gi[0],     li[2] * gj[1] + mj[2] * gi[1],
-                                         li[2] * gj[2] + mj[2] * gi[2] + d};
-                    double* kij = block_slot(targets[at(4 * i + j)]);
-                    for (int e = 0; e < 9; ++e)
-                        kij[e] += k[e];
-                    if (j == i)
-                        continue;
-                    double* kji = block_slot(targets[at(4 * j + i)]);
-                    kji[0] += k[0], kji[1] += k[3], kji[2] += k[6];
-                    kji[3] += k[1], kji[4] += k[4], kji[5] += k[7];
-                    kji[6] += k[2], kji[7] += k[5], kji[8] += k[8];
-                }
+            const unsigned transposed = m_block_transposed[at(t)];
+            const detail::PaddedColumns padded_g(rg), padded_l(lg), padded_m(mg);
+            for (std::size_t pair = 0; pair < TET_BLOCK_PAIRS.size(); ++pair)
+                detail::add_tet_block(block_slot(targets[pair]), TET_BLOCK_PAIRS[pair][0], TET_BLOCK_PAIRS[pair][1],
+                                      ((transposed >> pair) & 1u) != 0, rg, lg, mg, padded_g, padded_l, padded_m);
         }
     }
 }
@@ -286,19 +289,25 @@ void CorotationalFem::project_fixed(const std::vector<char>& fixed, BsrMatrix& m
         return;
     const auto& offsets = matrix.row_offsets();
     const auto& columns = matrix.columns();
-    for (Index r = 0; r < matrix.num_block_rows(); ++r) {
-        if (!fixed[at(r)])
-            continue;
-        for (Index k = offsets[at(r)]; k < offsets[at(r) + 1]; ++k) {
-            const Index c = columns[at(k)];
-            if (c == r) {
-                matrix.block(k) = Block3::Identity();
-                continue;
-            }
-            matrix.block(k).setZero();
-            matrix.block(matrix.find(c, r)).setZero(); // the pattern is symmetric
-        }
-    }
+    tbb::parallel_for(tbb::blocked_range<Index>(0, matrix.num_block_rows(), ROW_GRAIN),
+                      [&](const tbb::blocked_range<Index>& range) {
+                          for (Index r = range.begin(); r != range.end(); ++r)
+                              for (Index k = offsets[at(r)]; k < offsets[at(r) + 1]; ++k) {
+                                  const Index c = columns[at(k)];
+                                  if (c == r && fixed[at(r)])
+                                      matrix.block(k) = Block3::Identity();
+                                  else if (fixed[at(r)] || fixed[at(c)])
+                                      matrix.block(k).setZero();
+                              }
+                      });
+}
+
+void CorotationalFem::set_rotations(std::vector<Mat3> rotations)
+{
+    if (static_cast<Index>(rotations.size()) != num_tets())
+        throw std::invalid_argument("CorotationalFem::set_rotations: " + std::to_string(rotations.size()) +
+                                    " rotations for " + std::to_string(num_tets()) + " tets");
+    m_rotations = std::move(rotations);
 }
 
 void CorotationalFem::update_rotations(CRef<VecX> x)
@@ -355,7 +364,22 @@ double CorotationalFem::strain_energy(CRef<VecX> x) const
     return energy;
 }
 
-BsrMatrix CorotationalFem::make_matrix() const { return BsrMatrix(m_row_offsets, m_columns); }
+BsrMatrix CorotationalFem::make_matrix() const
+{
+    // Product chunks: each part's interior rows, then the interface rows cut into pieces of
+    // about a part's size (they couple mostly among themselves).
+    std::vector<Index> chunks{0};
+    const Index parts = m_layout.num_parts, first_interface = m_layout.first_interface_node();
+    for (Index p = 0; p < parts; ++p)
+        if (m_layout.node_offsets[at(p) + 1] > chunks.back())
+            chunks.push_back(m_layout.node_offsets[at(p) + 1]);
+    const Index piece = std::max<Index>(1024, first_interface / std::max<Index>(parts, 1));
+    for (Index r = first_interface; r < num_vertices(); r = std::min(r + piece, num_vertices()))
+        chunks.push_back(std::min(r + piece, num_vertices()));
+    if (chunks.size() == 1)
+        chunks.push_back(num_vertices());
+    return BsrMatrix::symmetric_upper(m_row_offsets, m_columns, chunks);
+}
 
 VecX CorotationalFem::von_mises_stress(CRef<VecX> x) const
 {

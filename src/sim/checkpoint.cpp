@@ -260,11 +260,10 @@ CheckpointState read_checkpoint(const fs::path& path, Scene& scene, std::uint64_
                     (*values)[3 * v + d] = nodes[at(3 * body.input_node(v) + d)];
         }
         const std::vector<double> saved = r.get_doubles(at(9 * n_tets), "rotations");
-        // CorotationalFem has no setter for its rotations yet; the vector is a non-const member
-        // of a non-const object, so writing through the const reference is well defined.
-        auto& rotations = const_cast<std::vector<Mat3>&>(body.fem().rotations());
+        std::vector<Mat3> rotations(at(n_tets));
         for (Index t = 0; t < n_tets; ++t)
             std::memcpy(rotations[at(t)].data(), saved.data() + 9 * at(body.input_tet(t)), 9 * sizeof(double));
+        body.fem().set_rotations(std::move(rotations));
     }
     CORO_CHECK(r.position() == end, InputError,
                where << ": corrupt checkpoint: " << end - r.position() << " bytes left over after the last body");

@@ -32,7 +32,7 @@ BsrMatrix merged_matrix(const std::vector<Body>& bodies, const std::vector<Index
     // Per merged row: (column, value) from the body's own row, then from coupling blocks.
     std::vector<std::vector<std::pair<Index, Block3>>> rows(at(n_rows));
     for (const Index b : group) {
-        const BsrMatrix& own = bodies[at(b)].system_matrix();
+        const BsrMatrix own = bodies[at(b)].system_matrix().to_general();
         const Index offset = offsets_of_body[at(b)];
         for (Index r = 0; r < own.num_block_rows(); ++r)
             for (Index k = own.row_offsets()[at(r)]; k < own.row_offsets()[at(r) + 1]; ++k)
@@ -115,8 +115,8 @@ std::vector<PcgResult> implicit_euler_step_with_contact(std::vector<Body>& bodie
             BsrMatrix& matrix = body.system_matrix();
             {
                 ScopedTimer timer(times.contact);
-                for (const ContactResponse::Block* block : blocks)
-                    matrix.block(matrix.find(block->row, block->col)) += block->value;
+                for (const ContactResponse::Block* block : blocks) // the blocks come in mirrored pairs
+                    matrix.add_symmetric_part(block->row, block->col, block->value);
             }
             ScopedTimer timer(times.solve);
             body.project_fixed(body.velocities());

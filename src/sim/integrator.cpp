@@ -19,8 +19,9 @@ void check_finite(const Body& body, const VecX& values, const char* what)
     Eigen::Index first = 0;
     while (std::isfinite(values[first]))
         ++first;
-    CORO_THROW(NumericalError, "body '" << body.name() << "': " << what << " of node " << first / 3
-                                        << " is " << values[first]);
+    CORO_THROW(NumericalError, "body '" << body.name() << "': " << what << " of node "
+                                        << body.input_node(static_cast<Index>(first / 3)) << " (mesh file order) is "
+                                        << values[first]);
 }
 } // namespace
 

@@ -1,11 +1,14 @@
 #include <corocontact/solver/bsr_matrix.hpp>
 
+#include "detail/upper_block_kernels.hpp"
+
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_reduce.h>
 
 #include <algorithm>
 #include <functional>
+#include <numeric>
 #include <stdexcept>
 #include <string>
 
@@ -13,6 +16,9 @@ namespace coro {
 
 namespace {
 constexpr Index SPMV_GRAIN = 256; // block rows per task (and per reduction leaf of multiply_dot)
+constexpr Index DEFAULT_CHUNK_ROWS = 1024; // upper storage without given chunks
+
+std::size_t at(Index i) { return static_cast<std::size_t>(i); }
 
 // y_r = Σ_k A_rk x_k for block rows [begin, end), each row summed in pattern order.
 inline void multiply_rows(const double* values, const Index* columns, const Index* offsets, const double* xd,
@@ -37,24 +43,73 @@ inline void multiply_rows(const double* values, const Index* columns, const Inde
 BsrMatrix::BsrMatrix(std::vector<Index> row_offsets, std::vector<Index> columns)
     : m_row_offsets(std::move(row_offsets)), m_columns(std::move(columns))
 {
+    check_pattern(false);
+    m_values.assign(9 * m_columns.size(), 0.0);
+}
+
+BsrMatrix BsrMatrix::symmetric_upper(std::vector<Index> row_offsets, std::vector<Index> columns,
+                                     std::vector<Index> chunk_offsets)
+{
+    BsrMatrix a;
+    a.m_row_offsets = std::move(row_offsets);
+    a.m_columns = std::move(columns);
+    a.check_pattern(true);
+    const Index n = a.num_block_rows();
+    if (chunk_offsets.empty()) {
+        for (Index r = 0; r < n; r += DEFAULT_CHUNK_ROWS)
+            chunk_offsets.push_back(r);
+        chunk_offsets.push_back(n); // {0, 0} for an empty matrix: one empty chunk
+    }
+    const bool rising = n == 0 || std::adjacent_find(chunk_offsets.begin(), chunk_offsets.end(),
+                                                     std::greater_equal<Index>()) == chunk_offsets.end();
+    if (chunk_offsets.front() != 0 || chunk_offsets.back() != n || !rising)
+        throw std::invalid_argument("BsrMatrix: chunk offsets must rise strictly from 0 to the row count");
+    a.m_chunk_offsets = std::move(chunk_offsets);
+
+    // Blocks whose column lies beyond their row's chunk, listed per column (CSC order).
+    std::vector<Index> chunk_end(at(n));
+    for (std::size_t c = 0; c + 1 < a.m_chunk_offsets.size(); ++c)
+        for (Index r = a.m_chunk_offsets[c]; r < a.m_chunk_offsets[c + 1]; ++r)
+            chunk_end[at(r)] = a.m_chunk_offsets[c + 1];
+    a.m_gather_offsets.assign(at(n) + 1, 0);
+    for (Index r = 0; r < n; ++r)
+        for (Index k = a.m_row_offsets[at(r)]; k < a.m_row_offsets[at(r) + 1]; ++k)
+            if (a.m_columns[at(k)] >= chunk_end[at(r)])
+                ++a.m_gather_offsets[at(a.m_columns[at(k)]) + 1];
+    std::partial_sum(a.m_gather_offsets.begin(), a.m_gather_offsets.end(), a.m_gather_offsets.begin());
+    a.m_gather_blocks.resize(at(a.m_gather_offsets.back()));
+    std::vector<Index> fill(a.m_gather_offsets.begin(), a.m_gather_offsets.end() - 1);
+    for (Index r = 0; r < n; ++r) // ascending rows: each column's list comes out sorted by source row
+        for (Index k = a.m_row_offsets[at(r)]; k < a.m_row_offsets[at(r) + 1]; ++k)
+            if (a.m_columns[at(k)] >= chunk_end[at(r)])
+                a.m_gather_blocks[at(fill[at(a.m_columns[at(k)])]++)] = {k, r};
+    a.m_values.assign(9 * a.m_columns.size(), 0.0);
+    return a;
+}
+
+void BsrMatrix::check_pattern(bool upper)
+{
     if (m_row_offsets.empty() || m_row_offsets.front() != 0 ||
         m_row_offsets.back() != static_cast<Index>(m_columns.size()))
         throw std::invalid_argument("BsrMatrix: row offsets do not match the column count");
     const Index n = num_block_rows();
-    m_diagonal.assign(static_cast<std::size_t>(n), -1);
+    m_diagonal.assign(at(n), -1);
     for (Index r = 0; r < n; ++r) {
-        const auto begin = m_columns.begin() + m_row_offsets[static_cast<std::size_t>(r)];
-        const auto end = m_columns.begin() + m_row_offsets[static_cast<std::size_t>(r) + 1];
-        if (!std::is_sorted(begin, end) || std::adjacent_find(begin, end) != end)
+        const auto begin = m_columns.begin() + m_row_offsets[at(r)];
+        const auto end = m_columns.begin() + m_row_offsets[at(r) + 1];
+        if (m_row_offsets[at(r)] > m_row_offsets[at(r) + 1] || !std::is_sorted(begin, end) ||
+            std::adjacent_find(begin, end) != end)
             throw std::invalid_argument("BsrMatrix: columns of row " + std::to_string(r) +
                                         " are not strictly ascending");
         if (begin != end && (*begin < 0 || *(end - 1) >= n))
             throw std::invalid_argument("BsrMatrix: column out of range in row " + std::to_string(r));
-        m_diagonal[static_cast<std::size_t>(r)] = find(r, r);
-        if (m_diagonal[static_cast<std::size_t>(r)] < 0)
+        if (upper && (begin == end || *begin != r))
+            throw std::invalid_argument("BsrMatrix: row " + std::to_string(r) +
+                                        " of an upper-stored matrix must start with its diagonal block");
+        m_diagonal[at(r)] = find(r, r);
+        if (m_diagonal[at(r)] < 0)
             throw std::invalid_argument("BsrMatrix: row " + std::to_string(r) + " has no diagonal block");
     }
-    m_values.assign(9 * m_columns.size(), 0.0);
 }
 
 Index BsrMatrix::find(Index row, Index column) const
@@ -65,6 +120,37 @@ Index BsrMatrix::find(Index row, Index column) const
     return (it != end && *it == column) ? static_cast<Index>(it - m_columns.begin()) : -1;
 }
 
+void BsrMatrix::add_symmetric_part(Index row, Index column, const Mat3& value)
+{
+    if (is_symmetric_upper() && column < row)
+        return;
+    const Index k = find(row, column);
+    if (k < 0)
+        throw std::invalid_argument("BsrMatrix: block (" + std::to_string(row) + ", " + std::to_string(column) +
+                                    ") is not in the pattern");
+    block(k) += value;
+}
+
+void BsrMatrix::multiply_upper_chunks(const double* xd, double* yd) const
+{
+    const auto n_chunks = static_cast<Index>(m_chunk_offsets.size()) - 1;
+    tbb::parallel_for(tbb::blocked_range<Index>(0, n_chunks, 1), [&](const tbb::blocked_range<Index>& range) {
+        for (Index chunk = range.begin(); chunk != range.end(); ++chunk) {
+            const Index begin = m_chunk_offsets[at(chunk)], end = m_chunk_offsets[at(chunk) + 1];
+            std::fill(yd + 3 * static_cast<std::ptrdiff_t>(begin), yd + 3 * static_cast<std::ptrdiff_t>(end), 0.0);
+            detail::upper_chunk_rows(m_values.data(), m_columns.data(), m_row_offsets.data(), xd, yd, begin, end);
+        }
+    });
+}
+
+void BsrMatrix::gather_upper_row(const double* xd, double* yd, Index row) const
+{
+    const Index first = m_gather_offsets[at(row)], last = m_gather_offsets[at(row) + 1];
+    if (first != last)
+        detail::gather_row(m_values.data(), m_gather_blocks.data(), first, last, xd,
+                           yd + 3 * static_cast<std::ptrdiff_t>(row));
+}
+
 void BsrMatrix::multiply(CRef<VecX> x, Eigen::Ref<VecX> y) const
 {
     const double* values = m_values.data();
@@ -72,6 +158,15 @@ void BsrMatrix::multiply(CRef<VecX> x, Eigen::Ref<VecX> y) const
     const Index* offsets = m_row_offsets.data();
     const double* xd = x.data();
     double* yd = y.data();
+    if (is_symmetric_upper()) {
+        multiply_upper_chunks(xd, yd);
+        tbb::parallel_for(tbb::blocked_range<Index>(0, num_block_rows(), SPMV_GRAIN),
+                          [&](const tbb::blocked_range<Index>& range) {
+                              for (Index r = range.begin(); r != range.end(); ++r)
+                                  gather_upper_row(xd, yd, r);
+                          });
+        return;
+    }
     tbb::parallel_for(tbb::blocked_range<Index>(0, num_block_rows(), SPMV_GRAIN),
                       [&](const tbb::blocked_range<Index>& range) {
                           multiply_rows(values, columns, offsets, xd, yd, range.begin(), range.end());
@@ -85,10 +180,17 @@ double BsrMatrix::multiply_dot(CRef<VecX> x, Eigen::Ref<VecX> y) const
     const Index* offsets = m_row_offsets.data();
     const double* xd = x.data();
     double* yd = y.data();
+    const bool upper = is_symmetric_upper();
+    if (upper)
+        multiply_upper_chunks(xd, yd);
     return tbb::parallel_deterministic_reduce(
         tbb::blocked_range<Index>(0, num_block_rows(), SPMV_GRAIN), 0.0,
         [&](const tbb::blocked_range<Index>& range, double acc) {
-            multiply_rows(values, columns, offsets, xd, yd, range.begin(), range.end());
+            if (upper)
+                for (Index r = range.begin(); r != range.end(); ++r)
+                    gather_upper_row(xd, yd, r);
+            else
+                multiply_rows(values, columns, offsets, xd, yd, range.begin(), range.end());
             double sum = 0.0;
             for (std::ptrdiff_t i = 3 * static_cast<std::ptrdiff_t>(range.begin());
                  i < 3 * static_cast<std::ptrdiff_t>(range.end()); ++i)
@@ -101,17 +203,50 @@ double BsrMatrix::multiply_dot(CRef<VecX> x, Eigen::Ref<VecX> y) const
 SparseMat BsrMatrix::to_sparse() const
 {
     std::vector<Eigen::Triplet<double, Index>> triplets;
-    triplets.reserve(m_values.size());
+    triplets.reserve(2 * m_values.size());
     for (Index r = 0; r < num_block_rows(); ++r)
-        for (Index k = m_row_offsets[static_cast<std::size_t>(r)];
-             k < m_row_offsets[static_cast<std::size_t>(r) + 1]; ++k)
+        for (Index k = m_row_offsets[at(r)]; k < m_row_offsets[at(r) + 1]; ++k) {
+            const Index c = m_columns[at(k)];
             for (int a = 0; a < 3; ++a)
-                for (int b = 0; b < 3; ++b)
-                    triplets.emplace_back(3 * r + a, 3 * m_columns[static_cast<std::size_t>(k)] + b,
-                                          block(k)(a, b));
+                for (int b = 0; b < 3; ++b) {
+                    triplets.emplace_back(3 * r + a, 3 * c + b, block(k)(a, b));
+                    if (is_symmetric_upper() && c != r)
+                        triplets.emplace_back(3 * c + b, 3 * r + a, block(k)(a, b));
+                }
+        }
     SparseMat sparse(num_dofs(), num_dofs());
     sparse.setFromTriplets(triplets.begin(), triplets.end());
     return sparse;
+}
+
+BsrMatrix BsrMatrix::to_general() const
+{
+    if (!is_symmetric_upper())
+        return *this;
+    const Index n = num_block_rows();
+    // Row r of the whole matrix: the mirrored blocks (k, source) of rows above it, then its own.
+    std::vector<std::vector<std::pair<Index, Index>>> lower(at(n)); // per row: (column, stored block)
+    for (Index r = 0; r < n; ++r)
+        for (Index k = m_row_offsets[at(r)] + 1; k < m_row_offsets[at(r) + 1]; ++k)
+            lower[at(m_columns[at(k)])].emplace_back(r, k);
+    std::vector<Index> offsets{0}, columns;
+    columns.reserve(2 * m_columns.size());
+    for (Index r = 0; r < n; ++r) {
+        for (const auto& [c, k] : lower[at(r)])
+            columns.push_back(c);
+        columns.insert(columns.end(), m_columns.begin() + m_row_offsets[at(r)],
+                       m_columns.begin() + m_row_offsets[at(r) + 1]);
+        offsets.push_back(static_cast<Index>(columns.size()));
+    }
+    BsrMatrix general(std::move(offsets), std::move(columns));
+    Index out = 0;
+    for (Index r = 0; r < n; ++r) {
+        for (const auto& [c, k] : lower[at(r)])
+            general.block(out++) = block(k).transpose();
+        for (Index k = m_row_offsets[at(r)]; k < m_row_offsets[at(r) + 1]; ++k)
+            general.block(out++) = block(k);
+    }
+    return general;
 }
 
 } // namespace coro

@@ -19,6 +19,7 @@
 #include <corocontact/solver/bsr_matrix.hpp>
 
 #include <array>
+#include <cstdint>
 #include <vector>
 
 namespace coro {
@@ -54,6 +55,12 @@ public:
     /// Current element rotations (identity before the first update), #T.
     const std::vector<Mat3>& rotations() const { return m_rotations; }
 
+    /// Replaces the element rotations, e.g. from a checkpoint: the next update_rotations()
+    /// starts its polar iteration from them.
+    /// @param[in] rotations  #T rotations, in this object's tet order
+    /// @throws std::invalid_argument if the count is not #T
+    void set_rotations(std::vector<Mat3> rotations);
+
     /// Internal forces f = f0 − K'x = −Σ_e R_e K_e (R_eᵀ x_e − X_e) with the current rotations.
     /// @param[in] x   #3V positions [m]
     /// @param[out] f  #3V forces [N]; contiguous, must not alias x
@@ -63,7 +70,8 @@ public:
     /// from `x` itself (not the stored rotations); its gradient is −internal_forces(x) [J].
     double strain_energy(CRef<VecX> x) const;
 
-    /// A matrix with this body's node-adjacency pattern (values zero).
+    /// A matrix with this body's node-adjacency pattern (values zero), symmetric in upper
+    /// storage with the parts as its product chunks.
     BsrMatrix make_matrix() const;
 
     /// Fills `matrix` (from make_matrix) with stiffness_scale·K' + mass_scale·M with the current
@@ -105,9 +113,12 @@ private:
     // Pattern of the matrix.
     std::vector<Index> m_row_offsets;
     std::vector<Index> m_columns;
-    // Where tet t's block (i, j) goes: ≥ 0 a block of the matrix (interior row), < 0 the
-    // interface buffer entry −1 − target. Likewise for the 4 corner forces.
-    std::vector<std::array<Index, 16>> m_block_targets;
+    // Where tet t's block (i, j), i ≤ j, goes (the 10 pairs in TET_BLOCK_PAIRS order): ≥ 0 a
+    // block of the matrix (interior row), < 0 the interface buffer entry −1 − target; bit
+    // `pair` of m_block_transposed set when the block is stored transposed (node i > node j).
+    // Likewise for the 4 corner forces.
+    std::vector<std::array<Index, 10>> m_block_targets;
+    std::vector<std::uint16_t> m_block_transposed;
     std::vector<std::array<Index, 4>> m_force_targets;
     // Interface buffers, part by part, and per interface block / node the buffer entries to
     // sum, in ascending part order.

@@ -1,10 +1,13 @@
 #pragma once
 /// @file bsr_matrix.hpp
 /// @brief Block sparse row matrix with 3×3 blocks: the pattern is built once per body and
-/// its values refilled every step.
+/// its values refilled every step. Either every block is stored (general), or, for a
+/// symmetric matrix, only the blocks on and above the diagonal (upper storage: half the
+/// memory traffic in PCG, which is bandwidth bound).
 
 #include <corocontact/core/types.hpp>
 
+#include <array>
 #include <vector>
 
 namespace coro {
@@ -13,6 +16,12 @@ namespace coro {
 using Block3 = Eigen::Matrix<double, 3, 3, Eigen::RowMajor>;
 
 /// A square matrix of #N×#N blocks of 3×3 (node × node); columns sorted within each row.
+///
+/// Upper storage holds block (r, c) for c ≥ r only and means A_cr = A_rcᵀ. Its product runs
+/// in two passes over fixed row chunks: a chunk's task multiplies its rows and applies the
+/// transposes of blocks whose column lies in the same chunk; blocks reaching across chunks
+/// are then gathered per row in ascending source row. The chunks are part of the matrix, so
+/// the result never depends on the thread count.
 class BsrMatrix {
 public:
     BsrMatrix() = default;
@@ -23,6 +32,20 @@ public:
     /// @throws std::invalid_argument if the pattern is malformed
     BsrMatrix(std::vector<Index> row_offsets, std::vector<Index> columns);
 
+    /// A symmetric matrix in upper storage.
+    /// @param[in] row_offsets    #N+1 offsets into `columns`
+    /// @param[in] columns        block columns, ascending within a row, each ≥ its row; the
+    ///                           first block of every row is its diagonal
+    /// @param[in] chunk_offsets  row boundaries 0 = c_0 < c_1 < … < c_m = #N of the product's
+    ///                           tasks; choose them so that most couplings stay inside a chunk
+    ///                           (the METIS parts); empty: chunks of 1024 rows
+    /// @throws std::invalid_argument if the pattern or the chunks are malformed
+    static BsrMatrix symmetric_upper(std::vector<Index> row_offsets, std::vector<Index> columns,
+                                     std::vector<Index> chunk_offsets = {});
+
+    /// True for upper storage (see symmetric_upper()).
+    bool is_symmetric_upper() const { return !m_chunk_offsets.empty(); }
+
     Index num_block_rows() const { return static_cast<Index>(m_row_offsets.size()) - 1; }
     Index num_blocks() const { return static_cast<Index>(m_columns.size()); }
     Index num_dofs() const { return 3 * num_block_rows(); }
@@ -31,8 +54,15 @@ public:
     const std::vector<Index>& columns() const { return m_columns; }
     /// Index of the diagonal block of block row `row`.
     Index diagonal(Index row) const { return m_diagonal[static_cast<std::size_t>(row)]; }
-    /// Index of block (row, column), or −1 if it is not in the pattern (binary search).
+    /// Index of block (row, column), or −1 if it is not stored (binary search; in upper
+    /// storage blocks below the diagonal are never stored).
     Index find(Index row, Index column) const;
+
+    /// Adds block (row, column) of a symmetric contribution whose mirror block (column, row)
+    /// is added by the same caller: general storage adds it, upper storage adds it when
+    /// column ≥ row and drops it otherwise (its mirror carries it).
+    /// @throws std::invalid_argument if the block is not in the pattern
+    void add_symmetric_part(Index row, Index column, const Mat3& value);
 
     Eigen::Map<Block3> block(Index k) { return Eigen::Map<Block3>(m_values.data() + 9 * k); }
     Eigen::Map<const Block3> block(Index k) const
@@ -57,14 +87,26 @@ public:
     /// @return x·y (not checked for finiteness)
     double multiply_dot(CRef<VecX> x, Eigen::Ref<VecX> y) const;
 
-    /// The same matrix as an Eigen sparse matrix (tests, reference paths).
+    /// The same matrix as an Eigen sparse matrix, every block (tests, reference paths).
     SparseMat to_sparse() const;
 
+    /// The same matrix in general storage (itself if it is general).
+    BsrMatrix to_general() const;
+
 private:
+    void check_pattern(bool upper);
+    void multiply_upper_chunks(const double* x, double* y) const;
+    void gather_upper_row(const double* x, double* y, Index row) const;
+
     std::vector<Index> m_row_offsets{0};
     std::vector<Index> m_columns;
     std::vector<Index> m_diagonal;
     std::vector<double> m_values;
+    // Upper storage only: the chunks, and per row the blocks (k, source row) of earlier
+    // chunks whose column is this row, ascending in source row (CSR over rows).
+    std::vector<Index> m_chunk_offsets;
+    std::vector<Index> m_gather_offsets;
+    std::vector<std::array<Index, 2>> m_gather_blocks;
 };
 
 } // namespace coro

@@ -1,0 +1,85 @@
+#pragma once
+// Adds one 3×3 block of a tet's rotated stiffness to its slot: K'_ij or its transpose, with
+// the gradients pre-scaled (L = sλ G, M = sμ G, d = M_j·G_i):
+//   K'_ij[a][b] = L_i[a] G_j[b] + M_j[a] G_i[b] + d δ_ab.
+// Row a of K'_ij is L_i[a] G_j + M_j[a] G_i (+ d e_a); row a of K'_ijᵀ is G_j[a] L_i + G_i[a] M_j
+// (+ d e_a). With AVX2 and FMA a row is one 4-wide vector whose fourth lane is zero, so the
+// 4-wide update of rows 0 and 1 leaves the element after them unchanged (it is the next row
+// of the same block); row 2 is written in 2 + 1 lanes, never touching the next block.
+
+#include <corocontact/core/types.hpp>
+
+#if defined(__AVX2__) && defined(__FMA__)
+#include <immintrin.h>
+#endif
+
+namespace coro::detail {
+
+#if defined(__AVX2__) && defined(__FMA__)
+
+/// The 4 columns of a 3×4 matrix as 4-wide vectors with a zero fourth lane.
+struct PaddedColumns {
+    __m256d col[4];
+    explicit PaddedColumns(const Mat34& m)
+    {
+        for (int c = 0; c < 4; ++c)
+            col[c] = _mm256_insertf128_pd(_mm256_castpd128_pd256(_mm_loadu_pd(m.col(c).data())),
+                                          _mm_load_sd(m.col(c).data() + 2), 1);
+    }
+};
+
+// k += (row a: s1[a] v1 + s2[a] v2 + d e_a), a = 0, 1, 2; k is a row-major 3×3 block.
+inline void add_rows(double* k, const double* s1, __m256d v1, const double* s2, __m256d v2, double d)
+{
+    const __m256d dv = _mm256_set1_pd(d), zero = _mm256_setzero_pd();
+    const __m256d row0 = _mm256_fmadd_pd(_mm256_broadcast_sd(s1), v1,
+                                         _mm256_fmadd_pd(_mm256_broadcast_sd(s2), v2, _mm256_blend_pd(zero, dv, 1)));
+    _mm256_storeu_pd(k, _mm256_add_pd(_mm256_loadu_pd(k), row0));
+    const __m256d row1 = _mm256_fmadd_pd(_mm256_broadcast_sd(s1 + 1), v1,
+                                         _mm256_fmadd_pd(_mm256_broadcast_sd(s2 + 1), v2, _mm256_blend_pd(zero, dv, 2)));
+    _mm256_storeu_pd(k + 3, _mm256_add_pd(_mm256_loadu_pd(k + 3), row1));
+    const __m256d row2 = _mm256_fmadd_pd(_mm256_broadcast_sd(s1 + 2), v1,
+                                         _mm256_fmadd_pd(_mm256_broadcast_sd(s2 + 2), v2, _mm256_blend_pd(zero, dv, 4)));
+    const __m128d low = _mm_add_pd(_mm_loadu_pd(k + 6), _mm256_castpd256_pd128(row2));
+    _mm_storeu_pd(k + 6, low);
+    _mm_store_sd(k + 8, _mm_add_sd(_mm_load_sd(k + 8), _mm256_extractf128_pd(row2, 1)));
+}
+
+/// Adds block (i, j) (transposed if `transposed`) of the tet whose rotated gradients are
+/// `g`, `l` = sλ g and `m` = sμ g (3×4 each; pg, pl, pm their padded columns) to `k`.
+inline void add_tet_block(double* k, int i, int j, bool transposed, const Mat34& g, const Mat34& l, const Mat34& m,
+                          const PaddedColumns& pg, const PaddedColumns& pl, const PaddedColumns& pm)
+{
+    const double* gi = g.col(i).data();
+    const double* mj = m.col(j).data();
+    const double d = mj[0] * gi[0] + mj[1] * gi[1] + mj[2] * gi[2];
+    if (transposed)
+        add_rows(k, g.col(j).data(), pl.col[i], gi, pm.col[j], d);
+    else
+        add_rows(k, l.col(i).data(), pg.col[j], mj, pg.col[i], d);
+}
+
+#else
+
+struct PaddedColumns {
+    explicit PaddedColumns(const Mat34&) {}
+};
+
+inline void add_tet_block(double* k, int i, int j, bool transposed, const Mat34& g, const Mat34& l, const Mat34& m,
+                          const PaddedColumns&, const PaddedColumns&, const PaddedColumns&)
+{
+    const double* gi = g.col(i).data();
+    const double* gj = g.col(j).data();
+    const double* li = l.col(i).data();
+    const double* mj = m.col(j).data();
+    const double d = mj[0] * gi[0] + mj[1] * gi[1] + mj[2] * gi[2];
+    for (int a = 0; a < 3; ++a)
+        for (int b = 0; b < 3; ++b) {
+            const double value = li[a] * gj[b] + mj[a] * gi[b] + (a == b ? d : 0.0);
+            k[transposed ? 3 * b + a : 3 * a + b] += value;
+        }
+}
+
+#endif
+
+} // namespace coro::detail
