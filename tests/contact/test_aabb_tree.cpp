@@ -333,3 +333,28 @@ TEST(AabbTree, NearestWithPlanesOfALargeTreeEqualsBruteForce)
         ASSERT_EQ(got.distance, std::sqrt(best)) << "query " << q;
     }
 }
+
+TEST(AabbTree, NearestAndAxisLineFromAFarPoint)
+{
+    // Squared distances beyond the float range: nothing may be pruned before a face is found.
+    const ContactSurface s = surface_of(make_sphere(Vec3(0.0, 0.0, 0.0), 1.0, 6), "sphere");
+    const Vec3 p(3e19, 1e19, -2e19);
+    const AabbTree::Nearest got = s.tree.nearest(s.vertices, p);
+    ASSERT_GE(got.face, 0);
+    double best = std::numeric_limits<double>::infinity();
+    for (Index f = 0; f < s.faces.rows(); ++f)
+        best = std::min(best, (closest_point_on_triangle(p, s.vertices.row(s.faces(f, 0)).transpose(),
+                                                         s.vertices.row(s.faces(f, 1)).transpose(),
+                                                         s.vertices.row(s.faces(f, 2)).transpose())
+                                   .point -
+                               p)
+                                  .squaredNorm());
+    EXPECT_EQ(got.distance, std::sqrt(best));
+    // The x line through (−3e19, 0.1, 0.2) crosses the sphere: faces are visited.
+    int visits = 0;
+    s.tree.faces_on_axis_line(Vec3(-3e19, 0.1, 0.2), 0, 0.0, [&](Index) {
+        ++visits;
+        return std::numeric_limits<double>::infinity();
+    });
+    EXPECT_GT(visits, 0);
+}

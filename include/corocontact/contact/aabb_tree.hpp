@@ -158,11 +158,12 @@ inline float float_up(double x)
     return f + (std::abs(f) * 0x1p-23f + 0x1p-126f);
 }
 /// A float threshold no smaller than `x` ≥ 0, with a relative margin of 2⁻¹⁸ (covers the
-/// rounding of the single precision lower bounds compared against it); FLT_MAX for +∞.
+/// rounding of the single precision lower bounds compared against it); +∞ from 10³⁸ on.
 inline float float_threshold(double x)
 {
-    const float f = static_cast<float>(std::min(x, 1e38)) * (1.0f + 0x1p-18f);
-    return std::min(f, std::numeric_limits<float>::max());
+    if (!(x < 1e38))
+        return std::numeric_limits<float>::infinity();
+    return static_cast<float>(x) * (1.0f + 0x1p-18f);
 }
 } // namespace detail
 
@@ -184,7 +185,7 @@ void AabbTree::faces_on_axis_line(const Vec3& point, int axis, double tolerance,
     const __m128 pa_hi = _mm_set1_ps(detail::float_up(pa));
     const __m128 zero = _mm_setzero_ps();
     double cutoff = std::numeric_limits<double>::infinity();
-    __m128 cutoff_f = _mm_set1_ps(std::numeric_limits<float>::max());
+    __m128 cutoff_f = _mm_set1_ps(std::numeric_limits<float>::infinity());
     Index stack[STACK_SIZE];
     float stack_gap[STACK_SIZE];
     int top = 0;
