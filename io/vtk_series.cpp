@@ -428,6 +428,14 @@ void VtkSeriesWriter::write_frame(Index step, double time, const std::vector<Fra
     }
 }
 
+void VtkSeriesWriter::adopt_frame(Index step, double time)
+{
+    const std::string vtm_file = frame_stem(m_name, step) + ".vtm";
+    CORO_CHECK(fs::is_regular_file(m_dir / vtm_file), InputError,
+               (m_dir / vtm_file).string() << ": frame " << step << " of the earlier run is missing");
+    m_frames.push_back({time, vtm_file});
+}
+
 void VtkSeriesWriter::write_pvd() const
 {
     std::ostringstream pvd;

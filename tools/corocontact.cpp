@@ -65,28 +65,6 @@ std::string frame_file(const std::string& name, coro::Index step)
     return name + "_" + std::string(digits.size() < 6 ? 6 - digits.size() : 0, '0') + digits + ".vtm";
 }
 
-// Until VtkSeriesWriter can adopt frames already on disk (it lists only the frames it wrote
-// itself), a restarted run rewrites NAME.pvd after each of its frames to list the first run's
-// frames too, in the writer's format, through a temporary file and a rename.
-void write_resumed_pvd(const coro::VtkSeriesWriter& writer, const std::string& name,
-                       const std::vector<coro::FrameRecord>& frames)
-{
-    std::string text = "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\" "
-                       "byte_order=\"LittleEndian\">\n  <Collection>\n";
-    for (const coro::FrameRecord& frame : frames) {
-        char time[64];
-        const std::to_chars_result end = std::to_chars(time, time + sizeof time, frame.time);
-        std::string escaped;
-        for (const char c : frame_file(name, frame.step))
-            escaped += c == '&' ? "&amp;" : c == '<' ? "&lt;" : c == '>' ? "&gt;" : c == '"' ? "&quot;"
-                     : c == '\'' ? "&apos;" : std::string(1, c);
-        text += "    <DataSet timestep=\"" + std::string(time, end.ptr) + "\" group=\"\" part=\"0\" file=\"" +
-                escaped + "\"/>\n";
-    }
-    text += "  </Collection>\n</VTKFile>\n";
-    coro::write_file_atomically(writer.pvd_path(), text);
-}
-
 const char* signal_name(int signal_number)
 {
     return signal_number == SIGINT ? "SIGINT" : signal_number == SIGTERM ? "SIGTERM" : "a signal";
@@ -147,6 +125,8 @@ int run_case(const RunOptions& options)
     }
 
     coro::VtkSeriesWriter writer(spec.simulation.output_dir, spec.simulation.name);
+    for (const coro::FrameRecord& frame : frames)
+        writer.adopt_frame(frame.step, frame.time);
     const auto checkpoint_path = spec.simulation.output_dir / (spec.simulation.name + ".checkpoint");
     if (checkpoints) {
         control.checkpoint_every = static_cast<coro::Index>(options.checkpoint_every);
@@ -159,14 +139,11 @@ int run_case(const RunOptions& options)
 
     coro::cli::Progress progress(!options.quiet, isatty(STDERR_FILENO) != 0);
     progress.set_first(control.resume_step);
-    const bool resumed = !options.restart.empty();
     const coro::RunSummary summary = simulation.run(
         last_step,
         [&](coro::Index step, double time) {
             writer.write_frame(step, time, coro::scene_frame(scene));
             frames.push_back({step, time});
-            if (resumed)
-                write_resumed_pvd(writer, spec.simulation.name, frames);
         },
         [&](coro::Index done, coro::Index total) { progress.update(done, total); }, control);
     progress.finish();
@@ -387,5 +364,10 @@ int main(int argc, char** argv)
     } catch (const coro::NumericalError& error) {
         std::cerr << "error: the simulation diverged: " << error.what() << "\n";
         return EXIT_DIVERGED;
+    } catch (const std::exception& error) {
+        // Not one of ours (e.g. std::bad_alloc from a library reading a corrupt file): still a
+        // message and the bad-input code rather than an abort.
+        std::cerr << "error: " << error.what() << "\n";
+        return EXIT_BAD_INPUT;
     }
 }

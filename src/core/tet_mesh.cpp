@@ -38,7 +38,7 @@ Index validate_and_orient(TetMesh& mesh, const std::string& source)
         for (int d = 0; d < 3; ++d)
             CORO_CHECK(std::isfinite(mesh.rest_positions(v, d)), InputError,
                        source << ": node " << v << " has a non-finite coordinate "
-                              << mesh.rest_positions(v, d) << " (expected a finite number)");
+                              << mesh.rest_positions(v, d) << " (expected a finite number; nodes counted from 0 in file order)");
 
     double edge_sum = 0.0;
     for (Index t = 0; t < mesh.num_tets(); ++t) {
@@ -46,11 +46,11 @@ Index validate_and_orient(TetMesh& mesh, const std::string& source)
             const Index v = mesh.tets(t, a);
             CORO_CHECK(v >= 0 && v < n_vertices, InputError,
                        source << ": tet " << t << " refers to node " << v
-                              << ", expected an index in [0, " << n_vertices << ")");
+                              << ", expected an index in [0, " << n_vertices << ") (tets and nodes counted from 0 in file order)");
             for (int b = 0; b < a; ++b)
                 CORO_CHECK(mesh.tets(t, b) != v, InputError,
                            source << ": tet " << t << " repeats node " << v
-                                  << " (expected 4 distinct nodes)");
+                                  << " (expected 4 distinct nodes; tets and nodes counted from 0 in file order)");
         }
         const auto& p = mesh.rest_positions;
         edge_sum += (p.row(mesh.tets(t, 1)) - p.row(mesh.tets(t, 0))).norm();
@@ -63,7 +63,7 @@ Index validate_and_orient(TetMesh& mesh, const std::string& source)
         const double volume = signed_volume(mesh, t);
         CORO_CHECK(std::abs(volume) > min_volume, InputError,
                    source << ": tet " << t << " has zero volume (" << volume
-                          << "; expected |volume| > " << min_volume << ")");
+                          << "; expected |volume| > " << min_volume << "; tets counted from 0 in file order)");
         if (volume < 0.0) {
             std::swap(mesh.tets(t, 2), mesh.tets(t, 3));
             ++reoriented;

@@ -239,6 +239,27 @@ TEST(VtkSeriesWriter, PvdListsExactlyTheFramesWrittenSoFar)
     }
 }
 
+TEST(VtkSeriesWriter, AContinuedSeriesListsTheEarlierRunsFramesFirst)
+{
+    const fs::path dir = test::scratch_dir("vtk_adopt");
+    {
+        VtkSeriesWriter first(dir, "series");
+        first.write_frame(0, 0.0, make_scene(0));
+        first.write_frame(5, 0.5, make_scene(1));
+    }
+    VtkSeriesWriter second(dir, "series");
+    second.adopt_frame(0, 0.0);
+    second.adopt_frame(5, 0.5);
+    EXPECT_THROW(second.adopt_frame(7, 0.7), InputError); // never written
+    second.write_frame(10, 1.0, make_scene(2));
+    const std::vector<PvdEntry> entries = read_pvd(second.pvd_path());
+    ASSERT_EQ(entries.size(), 3U);
+    EXPECT_EQ(entries[0].file, "series_000000.vtm");
+    EXPECT_EQ(entries[1].file, "series_000005.vtm");
+    EXPECT_EQ(entries[1].time, 0.5);
+    EXPECT_EQ(entries[2].file, "series_000010.vtm");
+}
+
 TEST(VtkSeriesWriter, RewritingAStepReplacesItsEntry)
 {
     const fs::path dir = test::scratch_dir("vtk_rewrite");

@@ -47,6 +47,13 @@ public:
     /// @throws InputError if a file cannot be written (names the file)
     void write_frame(Index step, double time, const std::vector<FrameBlock>& blocks);
 
+    /// Lists a frame that an earlier run wrote into the same directory (a restart continues
+    /// its series) without writing anything: the next .pvd lists it before the new frames.
+    /// @param[in] step  step number of the frame on disk
+    /// @param[in] time  its simulated time [s]
+    /// @throws InputError if `dir/NAME_<step>.vtm` does not exist
+    void adopt_frame(Index step, double time);
+
     /// Path of the .pvd collection.
     std::filesystem::path pvd_path() const;
     /// Number of frames written so far.
