@@ -29,20 +29,25 @@ struct PaddedColumns {
 };
 
 // k += (row a: s1[a] v1 + s2[a] v2 + d e_a), a = 0, 1, 2; k is a row-major 3×3 block.
+// All of k is loaded before anything is stored: a 4-wide load overlapping the previous row's
+// 4-wide store would wait for it (no store-to-load forwarding across partial overlaps).
 inline void add_rows(double* k, const double* s1, __m256d v1, const double* s2, __m256d v2, double d)
 {
+    const __m256d old0 = _mm256_loadu_pd(k), old1 = _mm256_loadu_pd(k + 3);
+    const __m128d old2 = _mm_loadu_pd(k + 6), old8 = _mm_load_sd(k + 8);
     const __m256d dv = _mm256_set1_pd(d), zero = _mm256_setzero_pd();
     const __m256d row0 = _mm256_fmadd_pd(_mm256_broadcast_sd(s1), v1,
                                          _mm256_fmadd_pd(_mm256_broadcast_sd(s2), v2, _mm256_blend_pd(zero, dv, 1)));
-    _mm256_storeu_pd(k, _mm256_add_pd(_mm256_loadu_pd(k), row0));
     const __m256d row1 = _mm256_fmadd_pd(_mm256_broadcast_sd(s1 + 1), v1,
                                          _mm256_fmadd_pd(_mm256_broadcast_sd(s2 + 1), v2, _mm256_blend_pd(zero, dv, 2)));
-    _mm256_storeu_pd(k + 3, _mm256_add_pd(_mm256_loadu_pd(k + 3), row1));
     const __m256d row2 = _mm256_fmadd_pd(_mm256_broadcast_sd(s1 + 2), v1,
                                          _mm256_fmadd_pd(_mm256_broadcast_sd(s2 + 2), v2, _mm256_blend_pd(zero, dv, 4)));
-    const __m128d low = _mm_add_pd(_mm_loadu_pd(k + 6), _mm256_castpd256_pd128(row2));
-    _mm_storeu_pd(k + 6, low);
-    _mm_store_sd(k + 8, _mm_add_sd(_mm_load_sd(k + 8), _mm256_extractf128_pd(row2, 1)));
+    // In this order: row 1's store rewrites k[3] after row 0's (unchanged) copy of it, row 2's
+    // rewrites k[6] after row 1's.
+    _mm256_storeu_pd(k, _mm256_add_pd(old0, row0));
+    _mm256_storeu_pd(k + 3, _mm256_add_pd(old1, row1));
+    _mm_storeu_pd(k + 6, _mm_add_pd(old2, _mm256_castpd256_pd128(row2)));
+    _mm_store_sd(k + 8, _mm_add_sd(old8, _mm256_extractf128_pd(row2, 1)));
 }
 
 /// Adds block (i, j) (transposed if `transposed`) of the tet whose rotated gradients are
