@@ -186,16 +186,23 @@ void BM_EmbreeFrameInsideOnly(benchmark::State& state)
     label(state, sc, (std::string(build_name(build_of(state))) + ", inside only").c_str());
 }
 
+/// (other body, position) of every candidate vertex of the exact mode, in pair order.
+std::vector<std::pair<Index, Vec3>> candidate_queries(const std::vector<ContactSurface>& surfaces)
+{
+    std::vector<std::pair<Index, Vec3>> queries;
+    for (const PairCandidates& pair : contact_candidates(surfaces, DetectionMode::EXACT))
+        for (Index v : pair.vertices)
+            queries.emplace_back(pair.other, surfaces[static_cast<std::size_t>(pair.body)].vertices.row(v).transpose());
+    return queries;
+}
+
 /// Plain first-hit rays (no filter, +x) from the candidate vertices: Embree's raw ray rate.
 void BM_EmbreeFirstHitRays(benchmark::State& state)
 {
     const Scene& sc = scene(static_cast<Index>(state.range(0)));
     const std::vector<ContactSurface>& surfaces = sc.surfaces[0];
     detail::EmbreeSceneSet scenes(surfaces, build_of(state));
-    std::vector<std::pair<Index, Vec3>> queries;
-    for (const PairCandidates& pair : contact_candidates(surfaces, DetectionMode::EXACT))
-        for (Index v : pair.vertices)
-            queries.emplace_back(pair.other, surfaces[static_cast<std::size_t>(pair.body)].vertices.row(v).transpose());
+    const std::vector<std::pair<Index, Vec3>> queries = candidate_queries(surfaces);
     for (auto _ : state)
         for (const auto& [other, p] : queries)
             benchmark::DoNotOptimize(scenes.first_hit(other, p, 0));
@@ -213,10 +220,7 @@ void BM_EmbreeInsideTests(benchmark::State& state)
     const Scene& sc = scene(static_cast<Index>(state.range(0)));
     const std::vector<ContactSurface>& surfaces = sc.surfaces[0];
     detail::EmbreeSceneSet scenes(surfaces, build_of(state));
-    std::vector<std::pair<Index, Vec3>> queries;
-    for (const PairCandidates& pair : contact_candidates(surfaces, DetectionMode::EXACT))
-        for (Index v : pair.vertices)
-            queries.emplace_back(pair.other, surfaces[static_cast<std::size_t>(pair.body)].vertices.row(v).transpose());
+    const std::vector<std::pair<Index, Vec3>> queries = candidate_queries(surfaces);
     detail::EmbreeQueryCounts counts;
     for (const auto& [other, p] : queries)
         scenes.inside_test(surfaces[static_cast<std::size_t>(other)], other, p, &counts);
