@@ -109,6 +109,14 @@ const char* build_name(detail::EmbreeBuild b)
     return "?";
 }
 
+/// Advances `frame` (cyclically) and moves the surfaces to that frame's positions.
+void next_frame(const Scene& sc, int& frame, std::vector<ContactSurface>& surfaces)
+{
+    frame = (frame + 1) % FRAMES;
+    for (std::size_t b = 0; b < surfaces.size(); ++b)
+        surfaces[b].update(sc.frames[static_cast<std::size_t>(frame)][b]);
+}
+
 void label(benchmark::State& state, const Scene& sc, const char* what)
 {
     state.SetLabel(std::string(what) + ", 2 spheres x " + std::to_string(sc.tets_per_sphere) + " tets, " +
@@ -158,9 +166,7 @@ void BM_EmbreeFrame(benchmark::State& state)
     detail::EmbreeSceneSet scenes(surfaces, build_of(state));
     int frame = 0;
     for (auto _ : state) {
-        frame = (frame + 1) % FRAMES;
-        for (std::size_t b = 0; b < surfaces.size(); ++b)
-            surfaces[b].update(sc.frames[static_cast<std::size_t>(frame)][b]);
+        next_frame(sc, frame, surfaces);
         scenes.update(surfaces);
         benchmark::DoNotOptimize(detail::detect_contacts_embree(surfaces, scenes, DetectionSettings{}, nullptr, nullptr));
     }
@@ -177,9 +183,7 @@ void BM_EmbreeFrameInsideOnly(benchmark::State& state)
     settings.contact_data = false;
     int frame = 0;
     for (auto _ : state) {
-        frame = (frame + 1) % FRAMES;
-        for (std::size_t b = 0; b < surfaces.size(); ++b)
-            surfaces[b].update(sc.frames[static_cast<std::size_t>(frame)][b]);
+        next_frame(sc, frame, surfaces);
         scenes.update(surfaces);
         benchmark::DoNotOptimize(detail::detect_contacts_embree(surfaces, scenes, settings, nullptr, nullptr));
     }
@@ -264,9 +268,7 @@ void BM_AxisRayRefit(benchmark::State& state)
     std::vector<ContactSurface> surfaces = sc.surfaces[0];
     int frame = 0;
     for (auto _ : state) {
-        frame = (frame + 1) % FRAMES;
-        for (std::size_t b = 0; b < surfaces.size(); ++b)
-            surfaces[b].update(sc.frames[static_cast<std::size_t>(frame)][b]);
+        next_frame(sc, frame, surfaces);
     }
     label(state, sc, "axis-ray");
 }
@@ -300,9 +302,7 @@ void BM_AxisRayFrame(benchmark::State& state)
     std::vector<ContactSurface> surfaces = sc.surfaces[0];
     int frame = 0;
     for (auto _ : state) {
-        frame = (frame + 1) % FRAMES;
-        for (std::size_t b = 0; b < surfaces.size(); ++b)
-            surfaces[b].update(sc.frames[static_cast<std::size_t>(frame)][b]);
+        next_frame(sc, frame, surfaces);
         benchmark::DoNotOptimize(detect_contacts(surfaces, DetectionSettings{}));
     }
     label(state, sc, "axis-ray exact");
@@ -317,9 +317,7 @@ void BM_AxisRayFrameInsideOnly(benchmark::State& state)
     settings.contact_data = false;
     int frame = 0;
     for (auto _ : state) {
-        frame = (frame + 1) % FRAMES;
-        for (std::size_t b = 0; b < surfaces.size(); ++b)
-            surfaces[b].update(sc.frames[static_cast<std::size_t>(frame)][b]);
+        next_frame(sc, frame, surfaces);
         benchmark::DoNotOptimize(detect_contacts(surfaces, settings));
     }
     label(state, sc, "axis-ray exact, inside only");
