@@ -1,6 +1,7 @@
 #include <corocontact/fem/corotational_fem.hpp>
 
 #include "detail/tet_block_kernel.hpp"
+#include "detail/tet_pack_kernel.hpp"
 
 #include <corocontact/core/error.hpp>
 #include <corocontact/fem/corotation.hpp>
@@ -21,6 +22,7 @@ namespace coro {
 namespace {
 constexpr Index TET_GRAIN = 1024;
 constexpr Index ROW_GRAIN = 256;
+constexpr double POLAR_TOLERANCE = 1e-15; // polar_rotation's default
 
 // The 10 blocks (i, j), i ≤ j, of a tet's symmetric 4×4 block matrix, in target order.
 constexpr std::array<std::array<int, 2>, 10> TET_BLOCK_PAIRS{
@@ -197,55 +199,130 @@ void CorotationalFem::part_pass(Index part, const Pass& pass)
         std::fill(force_buffer + 3 * static_cast<std::ptrdiff_t>(m_part_force_buffer_offsets[at(part)]),
                   force_buffer + 3 * static_cast<std::ptrdiff_t>(m_part_force_buffer_offsets[at(part) + 1]), 0.0);
     }
-    const auto block_slot = [&](Index target) {
-        return target >= 0 ? values + 9 * static_cast<std::ptrdiff_t>(target)
-                           : block_buffer + 9 * static_cast<std::ptrdiff_t>(-1 - target);
-    };
-    const auto force_slot = [&](Index target) {
-        return target >= 0 ? pass.forces + 3 * static_cast<std::ptrdiff_t>(target)
-                           : force_buffer + 3 * static_cast<std::ptrdiff_t>(-1 - target);
-    };
+    const Slots slots{values, block_buffer, pass.forces, force_buffer};
+    Index t = t_begin;
+#if defined(CORO_TET_PACKS)
+    for (; t < t_end; t += detail::LANES)
+        tet_pack(t, static_cast<int>(std::min<Index>(detail::LANES, t_end - t)), pass, slots);
+#endif
+    for (; t < t_end; ++t)
+        one_tet(t, pass, slots);
+}
 
-    for (Index t = t_begin; t < t_end; ++t) {
-        const Mat34& g = m_gradients[at(t)];
-        const Mat34 nodes = pass.x ? gather_nodes(m_tets, t, pass.x) : Mat34(Mat34::Zero());
-        if (pass.rotate) {
-            const Mat3 f = nodes * g.transpose();
-            CORO_CHECK(f.allFinite(), NumericalError, "tet " << t << ": the deformation gradient is not finite");
-            m_rotations[at(t)] = polar_rotation(f, m_rotations[at(t)]);
+void CorotationalFem::one_tet(Index t, const Pass& pass, const Slots& slots)
+{
+    const Mat34& g = m_gradients[at(t)];
+    const Mat34 nodes = pass.x ? gather_nodes(m_tets, t, pass.x) : Mat34(Mat34::Zero());
+    if (pass.rotate) {
+        const Mat3 f = nodes * g.transpose();
+        CORO_CHECK(f.allFinite(), NumericalError, "tet " << t << ": the deformation gradient is not finite");
+        m_rotations[at(t)] = polar_rotation(f, m_rotations[at(t)], POLAR_TOLERANCE);
+    }
+    if (!pass.forces && !slots.values)
+        return; // rotations only: no rotated gradients needed
+    const Mat34 rg = m_rotations[at(t)] * g; // rotated gradients G_i
+    const double volume = m_volumes[at(t)];
+
+    if (pass.forces) {
+        const Mat3 m = nodes * rg.transpose(); // F Rᵀ
+        const Mat3 strain = 0.5 * (m + m.transpose()) - Mat3::Identity();
+        const Mat34 f = -volume * linear_stress(strain, m_lambda, m_mu) * rg;
+        for (int a = 0; a < 4; ++a) {
+            double* out = slots.force(m_force_targets[at(t)][at(a)]);
+            out[0] += f(0, a);
+            out[1] += f(1, a);
+            out[2] += f(2, a);
         }
-        if (!pass.forces && !values)
-            continue; // rotations only: no rotated gradients needed
-        const Mat34 rg = m_rotations[at(t)] * g; // rotated gradients G_i
-        const double volume = m_volumes[at(t)];
+    }
+    if (slots.values) {
+        // K'_ij = s V (λ G_i G_jᵀ + μ G_j G_iᵀ + μ (G_i·G_j) I); entry (a, b) is
+        // λG_i[a]·G_j[b] + μG_j[a]·G_i[b] (+ the diagonal term): two products per entry
+        // with the gradients pre-scaled. Only i ≤ j is formed: the matrix keeps its upper
+        // blocks, K'_ij at (node i, node j), or K'_ijᵀ when node i is the larger.
+        const double s = pass.stiffness_scale * volume;
+        const Mat34 lg = (s * m_lambda) * rg, mg = (s * m_mu) * rg;
+        const auto& targets = m_block_targets[at(t)];
+        const unsigned transposed = m_block_transposed[at(t)];
+        const detail::PaddedColumns padded_g(rg), padded_l(lg), padded_m(mg);
+        for (std::size_t pair = 0; pair < TET_BLOCK_PAIRS.size(); ++pair)
+            detail::add_tet_block(slots.block(targets[pair]), TET_BLOCK_PAIRS[pair][0], TET_BLOCK_PAIRS[pair][1],
+                                  ((transposed >> pair) & 1u) != 0, rg, lg, mg, padded_g, padded_l, padded_m);
+    }
+}
 
-        if (pass.forces) {
-            const Mat3 m = nodes * rg.transpose(); // F Rᵀ
-            const Mat3 strain = 0.5 * (m + m.transpose()) - Mat3::Identity();
-            const Mat34 f = -volume * linear_stress(strain, m_lambda, m_mu) * rg;
+#if defined(CORO_TET_PACKS)
+void CorotationalFem::tet_pack(Index first, int count, const Pass& pass, const Slots& slots)
+{
+    using namespace detail;
+    // Lanes past `count` repeat the last tet; nothing of theirs is stored.
+    Index tet[LANES];
+    const double* gradients[LANES];
+    double* rotations[LANES];
+    for (int l = 0; l < LANES; ++l) {
+        tet[l] = first + std::min(l, count - 1);
+        gradients[l] = m_gradients[at(tet[l])].data();
+        rotations[l] = m_rotations[at(tet[l])].data();
+    }
+    Pack g[4][3], p[4][3];
+    load_mat34(gradients, g);
+    if (pass.x)
+        gather_nodes(m_tets, tet, pass.x, p);
+    else
+        for (auto& node : p)
+            for (Pack& v : node)
+                v = splat(0.0);
+
+    Mat3Pack r;
+    bool r_current = false;
+    if (pass.rotate) {
+        const Mat3Pack f = deformation_gradient(p, g);
+        if (const int bad = non_finite_lanes(f) & ((1 << count) - 1))
+            CORO_THROW(NumericalError,
+                       "tet " << tet[__builtin_ctz(static_cast<unsigned>(bad))] << ": the deformation gradient is not finite");
+        const int svd = polar_rotation_lanes(f, load_mat3(rotations), POLAR_TOLERANCE, r) & ((1 << count) - 1);
+        store_mat3(r, rotations, count);
+        for (int l = 0; l < count; ++l)
+            if ((svd >> l) & 1)
+                m_rotations[at(tet[l])] = polar_rotation_svd(lane_of(f, l));
+        r_current = svd == 0;
+    }
+    if (!pass.forces && !slots.values)
+        return;
+    if (!r_current)
+        r = load_mat3(rotations);
+    Pack rg[4][3];
+    rotate_gradients(r, g, rg);
+    const Pack volume = _mm256_set_pd(m_volumes[at(tet[3])], m_volumes[at(tet[2])], m_volumes[at(tet[1])],
+                                      m_volumes[at(tet[0])]);
+
+    if (pass.forces) {
+        Pack f[4][3];
+        corner_forces(p, rg, volume, m_lambda, m_mu, f);
+        double rows[LANES][12];
+        forces_by_lane(f, rows);
+        for (int l = 0; l < count; ++l)
             for (int a = 0; a < 4; ++a) {
-                double* out = force_slot(m_force_targets[at(t)][at(a)]);
-                out[0] += f(0, a);
-                out[1] += f(1, a);
-                out[2] += f(2, a);
+                double* out = slots.force(m_force_targets[at(tet[l])][at(a)]);
+                out[0] += rows[l][3 * a];
+                out[1] += rows[l][3 * a + 1];
+                out[2] += rows[l][3 * a + 2];
             }
-        }
-        if (values) {
-            // K'_ij = s V (λ G_i G_jᵀ + μ G_j G_iᵀ + μ (G_i·G_j) I); entry (a, b) is
-            // λG_i[a]·G_j[b] + μG_j[a]·G_i[b] (+ the diagonal term): two products per entry
-            // with the gradients pre-scaled. Only i ≤ j is formed: the matrix keeps its upper
-            // blocks, K'_ij at (node i, node j), or K'_ijᵀ when node i is the larger.
-            const double s = pass.stiffness_scale * volume;
-            const Mat34 lg = (s * m_lambda) * rg, mg = (s * m_mu) * rg;
-            const auto& targets = m_block_targets[at(t)];
-            const unsigned transposed = m_block_transposed[at(t)];
-            const detail::PaddedColumns padded_g(rg), padded_l(lg), padded_m(mg);
+    }
+    if (slots.values) {
+        std::uint16_t transposed[LANES];
+        for (int l = 0; l < LANES; ++l)
+            transposed[l] = m_block_transposed[at(tet[l])];
+        double blocks[LANES][90];
+        stiffness_blocks_by_lane(rg, mul(volume, splat(pass.stiffness_scale)), m_lambda, m_mu, TET_BLOCK_PAIRS, transposed,
+                                 blocks);
+        for (int l = 0; l < count; ++l) {
+            const auto& targets = m_block_targets[at(tet[l])];
             for (std::size_t pair = 0; pair < TET_BLOCK_PAIRS.size(); ++pair)
-                detail::add_tet_block(block_slot(targets[pair]), TET_BLOCK_PAIRS[pair][0], TET_BLOCK_PAIRS[pair][1],
-                                      ((transposed >> pair) & 1u) != 0, rg, lg, mg, padded_g, padded_l, padded_m);
+                add_block(slots.block(targets[pair]), blocks[l] + 9 * pair);
         }
     }
 }
+#endif
 
 void CorotationalFem::reduce_interfaces(const Pass& pass)
 {

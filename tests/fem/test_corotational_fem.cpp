@@ -1,6 +1,8 @@
 #include "mesh_fixtures.hpp"
 #include "near.hpp"
 
+#include <corocontact/core/error.hpp>
+#include <corocontact/fem/corotation.hpp>
 #include <corocontact/fem/corotational_fem.hpp>
 #include <corocontact/fem/tet_element.hpp>
 
@@ -8,7 +10,9 @@
 #include <gtest/gtest.h>
 #include <tbb/task_arena.h>
 
+#include <limits>
 #include <random>
+#include <string>
 
 using namespace coro;
 
@@ -226,4 +230,55 @@ TEST(CorotationalFem, SameResultsWithOneAndTwoThreads)
     const auto two = run(2);
     EXPECT_EQ(one.first, two.first);
     EXPECT_TRUE(one.second == two.second);
+}
+
+// The element loop runs 4 tets per AVX2 pack where it can (the last pack of a part padded):
+// every tet's rotation must be the one polar_rotation gives for that tet alone, also for the
+// inverted tets whose lanes go to the SVD while the others iterate.
+TEST(CorotationalFem, EveryTetRotationEqualsItsOwnPolarRotation)
+{
+    const TetMesh mesh = test::irregular_box(3, 0.3, 11); // 162 tets: the last pack holds 2
+    ASSERT_NE(mesh.num_tets() % 4, 0);
+    std::mt19937 rng(5);
+    std::uniform_real_distribution<double> u(-0.25, 0.25); // cells are 1/3 wide: some tets invert
+    VecX x = deformed(mesh, rotation(70, Vec3(0, 1, 1)), Vec3(1, 0, 0), 0.05, 6);
+    for (Eigen::Index i = 0; i < x.size(); ++i)
+        x[i] += u(rng);
+
+    CorotationalFem fem(mesh, test_material());
+    fem.update_rotations(x);
+    Index inverted = 0;
+    for (Index t = 0; t < mesh.num_tets(); ++t) {
+        Mat34 nodes;
+        for (int a = 0; a < 4; ++a)
+            nodes.col(a) = x.segment<3>(3 * mesh.tets(t, a));
+        const auto& p = mesh.rest_positions;
+        const TetRest rest = make_tet_rest(p.row(mesh.tets(t, 0)), p.row(mesh.tets(t, 1)), p.row(mesh.tets(t, 2)),
+                                           p.row(mesh.tets(t, 3)));
+        const Mat3 f = nodes * shape_gradients(rest).transpose();
+        inverted += f.determinant() < 0.0 ? 1 : 0;
+        const Mat3& r = fem.rotations()[static_cast<std::size_t>(t)];
+        EXPECT_NEAR_REL(r, polar_rotation(f, Mat3::Identity()), 1e-10, 0.0) << "tet " << t;
+        EXPECT_NEAR(r.determinant(), 1.0, 1e-12) << "tet " << t;
+    }
+    EXPECT_GT(inverted, 5); // the SVD lanes were exercised
+    EXPECT_LT(inverted, mesh.num_tets() / 2);
+}
+
+TEST(CorotationalFem, NonFiniteNodeNamesTheFirstTetHoldingIt)
+{
+    const TetMesh mesh = test::irregular_box(3, 0.3, 12);
+    VecX x = deformed(mesh, Mat3::Identity(), Vec3::Zero(), 0.01, 7);
+    const Index node = mesh.tets(mesh.num_tets() - 3, 2);
+    Index first = 0;
+    while ((mesh.tets.row(first).array() != node).all())
+        ++first;
+    x[3 * node + 1] = std::numeric_limits<double>::quiet_NaN();
+    CorotationalFem fem(mesh, test_material());
+    try {
+        fem.update_rotations(x);
+        FAIL() << "no NumericalError";
+    } catch (const NumericalError& e) {
+        EXPECT_NE(std::string(e.what()).find("tet " + std::to_string(first) + ":"), std::string::npos) << e.what();
+    }
 }

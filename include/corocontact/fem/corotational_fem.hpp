@@ -19,6 +19,7 @@
 #include <corocontact/solver/bsr_matrix.hpp>
 
 #include <array>
+#include <cstddef>
 #include <cstdint>
 #include <vector>
 
@@ -95,8 +96,29 @@ private:
         double stiffness_scale = 0.0;
         double mass_scale = 0.0;
     };
+    // Where a tet's contributions go: a target ≥ 0 is a matrix block or node of an interior
+    // row, a target < 0 the interface buffer entry −1 − target.
+    struct Slots {
+        double* values;       // matrix values, or null when no matrix is assembled
+        double* block_buffer;
+        double* forces;       // #3V, or null when no forces are computed
+        double* force_buffer;
+        double* block(Index target) const
+        {
+            return target >= 0 ? values + 9 * static_cast<std::ptrdiff_t>(target)
+                               : block_buffer + 9 * static_cast<std::ptrdiff_t>(-1 - target);
+        }
+        double* force(Index target) const
+        {
+            return target >= 0 ? forces + 3 * static_cast<std::ptrdiff_t>(target)
+                               : force_buffer + 3 * static_cast<std::ptrdiff_t>(-1 - target);
+        }
+    };
     void run_pass(const Pass& pass);
     void part_pass(Index part, const Pass& pass);
+    void one_tet(Index t, const Pass& pass, const Slots& slots);
+    // Tets first .. first + count − 1 (count ≤ 4) as one AVX2 pack (detail/tet_pack_kernel.hpp).
+    void tet_pack(Index first, int count, const Pass& pass, const Slots& slots);
     void reduce_interfaces(const Pass& pass);
     static void project_fixed(const std::vector<char>& fixed, BsrMatrix& matrix);
 
