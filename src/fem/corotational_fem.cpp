@@ -24,9 +24,7 @@ constexpr Index TET_GRAIN = 1024;
 constexpr Index ROW_GRAIN = 256;
 constexpr double POLAR_TOLERANCE = 1e-15; // polar_rotation's default
 
-// The 10 blocks (i, j), i ≤ j, of a tet's symmetric 4×4 block matrix, in target order.
-constexpr std::array<std::array<int, 2>, 10> TET_BLOCK_PAIRS{
-    {{0, 0}, {0, 1}, {0, 2}, {0, 3}, {1, 1}, {1, 2}, {1, 3}, {2, 2}, {2, 3}, {3, 3}}};
+using detail::TET_BLOCK_PAIRS;
 
 std::size_t at(Index i) { return static_cast<std::size_t>(i); }
 
@@ -298,28 +296,13 @@ void CorotationalFem::tet_pack(Index first, int count, const Pass& pass, const S
     if (pass.forces) {
         Pack f[4][3];
         corner_forces(p, rg, volume, m_lambda, m_mu, f);
-        double rows[LANES][12];
-        forces_by_lane(f, rows);
-        for (int l = 0; l < count; ++l)
-            for (int a = 0; a < 4; ++a) {
-                double* out = slots.force(m_force_targets[at(tet[l])][at(a)]);
-                out[0] += rows[l][3 * a];
-                out[1] += rows[l][3 * a + 1];
-                out[2] += rows[l][3 * a + 2];
-            }
+        add_corner_forces(f, count, [&](int l, int a) { return slots.force(m_force_targets[at(tet[l])][at(a)]); });
     }
     if (slots.values) {
         std::uint16_t transposed[LANES];
         for (int l = 0; l < LANES; ++l)
             transposed[l] = m_block_transposed[at(tet[l])];
-        double blocks[LANES][90];
-        stiffness_blocks_by_lane(rg, mul(volume, splat(pass.stiffness_scale)), m_lambda, m_mu, TET_BLOCK_PAIRS, transposed,
-                                 blocks);
-        for (int l = 0; l < count; ++l) {
-            const auto& targets = m_block_targets[at(tet[l])];
-            for (std::size_t pair = 0; pair < TET_BLOCK_PAIRS.size(); ++pair)
-                add_block(slots.block(targets[pair]), blocks[l] + 9 * pair);
-        }
+        add_stiffness_blocks(rg, mul(volume, splat(pass.stiffness_scale)), m_lambda, m_mu, transposed, count, [&](int l, int pair) { return slots.block(m_block_targets[at(tet[l])][at(pair)]); });
     }
 }
 #endif

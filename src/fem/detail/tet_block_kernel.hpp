@@ -9,11 +9,17 @@
 
 #include <corocontact/core/types.hpp>
 
+#include <array>
+
 #if defined(__AVX2__) && defined(__FMA__)
 #include <immintrin.h>
 #endif
 
 namespace coro::detail {
+
+/// The 10 blocks (i, j), i ≤ j, of a tet's symmetric 4×4 block matrix, in target order.
+inline constexpr std::array<std::array<int, 2>, 10> TET_BLOCK_PAIRS{
+    {{0, 0}, {0, 1}, {0, 2}, {0, 3}, {1, 1}, {1, 2}, {1, 3}, {2, 2}, {2, 3}, {3, 3}}};
 
 #if defined(__AVX2__) && defined(__FMA__)
 

@@ -12,6 +12,8 @@
 #if defined(__AVX2__) && defined(__FMA__)
 #define CORO_TET_PACKS 1
 
+#include "tet_block_kernel.hpp"
+
 #include <corocontact/core/types.hpp>
 
 #include <immintrin.h>
@@ -19,6 +21,7 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <utility>
 
 namespace coro::detail {
 
@@ -270,26 +273,81 @@ inline Mat3 lane_of(const Mat3Pack& a, int lane)
     return out;
 }
 
-/// The 12 corner forces out[a][r] of each lane as lane-major rows: rows[l][3a + r].
-inline void forces_by_lane(const Pack f[4][3], double rows[LANES][12])
+/// Adds the 12 corner forces f[a][r] of lane l to the 3 doubles at corner(l, a), a = 0..3, for
+/// lanes l < count, lane by lane.
+template <class Corner>
+inline void add_corner_forces(const Pack f[4][3], int count, const Corner& corner)
 {
     Pack e[12];
     for (int k = 0; k < 12; ++k)
         e[k] = f[k / 3][k % 3];
-    for (int q = 0; q < 3; ++q) {
+    for (int q = 0; q < 3; ++q)
         transpose4(e[4 * q], e[4 * q + 1], e[4 * q + 2], e[4 * q + 3]);
-        for (int l = 0; l < LANES; ++l)
-            _mm256_storeu_pd(rows[l] + 4 * q, e[4 * q + l]);
+    for (int l = 0; l < count; ++l) {
+        alignas(32) double row[12]; // f_0, f_1, f_2, f_3 of lane l
+        _mm256_store_pd(row, e[l]);
+        _mm256_store_pd(row + 4, e[4 + l]);
+        _mm256_store_pd(row + 8, e[8 + l]);
+        for (int a = 0; a < 4; ++a) {
+            double* out = corner(l, a);
+            out[0] += row[3 * a];
+            out[1] += row[3 * a + 1];
+            out[2] += row[3 * a + 2];
+        }
     }
 }
 
-/// The rotated stiffness blocks K'_ij, i ≤ j in `pairs` order, of each lane as lane-major
-/// row-major 3×3 blocks: blocks[l][9·pair + 3a + b]; a block is transposed in lane l when bit
-/// `pair` of transposed[l] is set. K'_ij[a][b] = L_i[a] G_j[b] + M_j[a] G_i[b] + (M_j·G_i) δ_ab
-/// with L = sλ G and M = sμ G (s = stiffness scale × V).
-inline void stiffness_blocks_by_lane(const Pack rg[4][3], Pack scale, double lambda, double mu,
-                                     const std::array<std::array<int, 2>, 10>& pairs,
-                                     const std::uint16_t transposed[LANES], double blocks[LANES][90])
+/// Adds block `Pair` (TET_BLOCK_PAIRS order) of every lane to block(lane, Pair); see
+/// add_stiffness_blocks. A template so that the block's gradient indices are constants.
+template <int Pair, class BlockSlot>
+inline void add_stiffness_block(const Pack rg[4][3], const Pack l[4][3], const Pack m[4][3], __m256i transposed,
+                                int count, const BlockSlot& block)
+{
+    constexpr int i = TET_BLOCK_PAIRS[Pair][0], j = TET_BLOCK_PAIRS[Pair][1];
+    const __m256i bit = _mm256_set1_epi64x(1LL << Pair);
+    const Pack flip = _mm256_castsi256_pd(_mm256_cmpeq_epi64(_mm256_and_si256(transposed, bit), bit));
+    const Pack d = fma(m[j][2], rg[i][2], fma(m[j][1], rg[i][1], mul(m[j][0], rg[i][0])));
+    Pack k[3][3];
+    for (int a = 0; a < 3; ++a)
+        for (int b = 0; b < 3; ++b)
+            k[a][b] = fma(l[i][a], rg[j][b], mul(m[j][a], rg[i][b]));
+    for (int a = 0; a < 3; ++a)
+        k[a][a] = add(k[a][a], d);
+    for (int a = 0; a < 3; ++a)
+        for (int b = a + 1; b < 3; ++b) {
+            const Pack ab = k[a][b];
+            k[a][b] = select(flip, k[b][a], ab);
+            k[b][a] = select(flip, ab, k[b][a]);
+        }
+    Pack low[LANES] = {k[0][0], k[0][1], k[0][2], k[1][0]};  // row-major entries 0..3
+    Pack high[LANES] = {k[1][1], k[1][2], k[2][0], k[2][1]}; // entries 4..7
+    transpose4(low[0], low[1], low[2], low[3]);
+    transpose4(high[0], high[1], high[2], high[3]);
+    alignas(32) double last[LANES]; // entry 8
+    _mm256_store_pd(last, k[2][2]);
+    for (int lane = 0; lane < count; ++lane) {
+        double* target = block(lane, Pair);
+        _mm256_storeu_pd(target, add(_mm256_loadu_pd(target), low[lane]));
+        _mm256_storeu_pd(target + 4, add(_mm256_loadu_pd(target + 4), high[lane]));
+        target[8] += last[lane];
+    }
+}
+
+template <class BlockSlot, int... Pair>
+inline void add_stiffness_block_list(const Pack rg[4][3], const Pack l[4][3], const Pack m[4][3], __m256i transposed,
+                                     int count, const BlockSlot& block, std::integer_sequence<int, Pair...>)
+{
+    (add_stiffness_block<Pair>(rg, l, m, transposed, count, block), ...);
+}
+
+/// Adds the rotated stiffness blocks K'_ij, i ≤ j in TET_BLOCK_PAIRS order, of lane l to the
+/// row-major 3×3 block at block(l, pair), transposed where bit `pair` of transposed[l] is set,
+/// for lanes l < count. K'_ij[a][b] = L_i[a] G_j[b] + M_j[a] G_i[b] + (M_j·G_i) δ_ab with
+/// L = sλ G and M = sμ G (s = stiffness scale × V). A tet's 10 blocks go to 10 different
+/// blocks; two tets of a pack may share one, and then they add in a fixed (pair, lane) order.
+template <class BlockSlot>
+inline void add_stiffness_blocks(const Pack rg[4][3], Pack scale, double lambda, double mu,
+                                 const std::uint16_t transposed[LANES], int count, const BlockSlot& block)
 {
     Pack l[4][3], m[4][3];
     const Pack s_lambda = mul(scale, splat(lambda)), s_mu = mul(scale, splat(mu));
@@ -298,46 +356,8 @@ inline void stiffness_blocks_by_lane(const Pack rg[4][3], Pack scale, double lam
             l[a][r] = mul(s_lambda, rg[a][r]);
             m[a][r] = mul(s_mu, rg[a][r]);
         }
-    for (int pair = 0; pair < 10; ++pair) {
-        const int i = pairs[static_cast<std::size_t>(pair)][0], j = pairs[static_cast<std::size_t>(pair)][1];
-        const Pack flip = _mm256_castsi256_pd(_mm256_set_epi64x(
-            -static_cast<long long>((transposed[3] >> pair) & 1u), -static_cast<long long>((transposed[2] >> pair) & 1u),
-            -static_cast<long long>((transposed[1] >> pair) & 1u), -static_cast<long long>((transposed[0] >> pair) & 1u)));
-        const Pack d = fma(m[j][2], rg[i][2], fma(m[j][1], rg[i][1], mul(m[j][0], rg[i][0])));
-        Pack k[3][3];
-        for (int a = 0; a < 3; ++a)
-            for (int b = 0; b < 3; ++b)
-                k[a][b] = fma(l[i][a], rg[j][b], mul(m[j][a], rg[i][b]));
-        for (int a = 0; a < 3; ++a)
-            k[a][a] = add(k[a][a], d);
-        for (int a = 0; a < 3; ++a)
-            for (int b = a + 1; b < 3; ++b) {
-                const Pack ab = k[a][b];
-                k[a][b] = select(flip, k[b][a], ab);
-                k[b][a] = select(flip, ab, k[b][a]);
-            }
-        Pack e0 = k[0][0], e1 = k[0][1], e2 = k[0][2], e3 = k[1][0];
-        Pack e4 = k[1][1], e5 = k[1][2], e6 = k[2][0], e7 = k[2][1];
-        transpose4(e0, e1, e2, e3);
-        transpose4(e4, e5, e6, e7);
-        const Pack low[LANES] = {e0, e1, e2, e3}, high[LANES] = {e4, e5, e6, e7};
-        alignas(32) double last[LANES];
-        _mm256_store_pd(last, k[2][2]);
-        for (int lane = 0; lane < LANES; ++lane) {
-            double* block = blocks[lane] + 9 * pair;
-            _mm256_storeu_pd(block, low[lane]);
-            _mm256_storeu_pd(block + 4, high[lane]);
-            block[8] = last[lane];
-        }
-    }
-}
-
-/// target[0..9) += block[0..9).
-inline void add_block(double* target, const double* block)
-{
-    _mm256_storeu_pd(target, _mm256_add_pd(_mm256_loadu_pd(target), _mm256_loadu_pd(block)));
-    _mm256_storeu_pd(target + 4, _mm256_add_pd(_mm256_loadu_pd(target + 4), _mm256_loadu_pd(block + 4)));
-    target[8] += block[8];
+    const __m256i bits = _mm256_set_epi64x(transposed[3], transposed[2], transposed[1], transposed[0]);
+    add_stiffness_block_list(rg, l, m, bits, count, block, std::make_integer_sequence<int, 10>{});
 }
 
 } // namespace coro::detail
