@@ -347,19 +347,24 @@ void CorotationalFem::project_fixed(const std::vector<char>& fixed, BsrMatrix& m
 {
     if (fixed.empty())
         return;
-    const auto& offsets = matrix.row_offsets();
-    const auto& columns = matrix.columns();
-    tbb::parallel_for(tbb::blocked_range<Index>(0, matrix.num_block_rows(), ROW_GRAIN),
-                      [&](const tbb::blocked_range<Index>& range) {
-                          for (Index r = range.begin(); r != range.end(); ++r)
-                              for (Index k = offsets[at(r)]; k < offsets[at(r) + 1]; ++k) {
-                                  const Index c = columns[at(k)];
-                                  if (c == r && fixed[at(r)])
-                                      matrix.block(k) = Block3::Identity();
-                                  else if (fixed[at(r)] || fixed[at(c)])
-                                      matrix.block(k).setZero();
-                              }
-                      });
+    // The blocks in rows or columns of fixed nodes are listed once per set of fixed nodes (a
+    // body's never changes), so a step touches only them instead of scanning the pattern.
+    if (fixed != m_projected_fixed) {
+        m_projected_fixed = fixed;
+        m_fixed_blocks.clear();
+        m_fixed_rows.clear();
+        for (Index r = 0; r < num_vertices(); ++r) {
+            if (fixed[at(r)])
+                m_fixed_rows.push_back(r);
+            for (Index k = m_row_offsets[at(r)]; k < m_row_offsets[at(r) + 1]; ++k)
+                if (fixed[at(r)] || fixed[at(m_columns[at(k)])])
+                    m_fixed_blocks.push_back(k);
+        }
+    }
+    for (const Index k : m_fixed_blocks)
+        matrix.block(k).setZero();
+    for (const Index r : m_fixed_rows)
+        matrix.block(matrix.diagonal(r)) = Block3::Identity();
 }
 
 void CorotationalFem::set_rotations(std::vector<Mat3> rotations)

@@ -120,7 +120,7 @@ private:
     // Tets first .. first + count − 1 (count ≤ 4) as one AVX2 pack (detail/tet_pack_kernel.hpp).
     void tet_pack(Index first, int count, const Pass& pass, const Slots& slots);
     void reduce_interfaces(const Pass& pass);
-    static void project_fixed(const std::vector<char>& fixed, BsrMatrix& matrix);
+    void project_fixed(const std::vector<char>& fixed, BsrMatrix& matrix);
 
     Tets m_tets;
     PartLayout m_layout;
@@ -153,6 +153,11 @@ private:
     std::vector<Index> m_interface_block_entries;
     std::vector<Index> m_interface_force_offsets;   // per interface node, into entries
     std::vector<Index> m_interface_force_entries;
+    // project_fixed's lists for the fixed-node flags it last saw: blocks in a row or column of
+    // a fixed node, and the fixed rows.
+    std::vector<char> m_projected_fixed;
+    std::vector<Index> m_fixed_blocks;
+    std::vector<Index> m_fixed_rows;
 };
 
 } // namespace coro
