@@ -282,3 +282,27 @@ TEST(CorotationalFem, NonFiniteNodeNamesTheFirstTetHoldingIt)
         EXPECT_NE(std::string(e.what()).find("tet " + std::to_string(first) + ":"), std::string::npos) << e.what();
     }
 }
+
+// The fused pass (rotate a chunk, assemble it) must give exactly what the two passes give.
+TEST(CorotationalFem, FusedRotationAndAssemblyEqualsTwoPasses)
+{
+    const TetMesh mesh = test::irregular_box(4, 0.3, 13); // 384 tets: 12 chunks of 32
+    const VecX x = deformed(mesh, rotation(40, Vec3(1, 0, 1)), Vec3(0, 0, 1), 0.1, 8);
+    std::vector<char> fixed(static_cast<std::size_t>(mesh.num_vertices()), 0);
+    fixed[3] = 1;
+
+    CorotationalFem two_passes(mesh, test_material());
+    two_passes.update_rotations(x);
+    BsrMatrix a = two_passes.make_matrix();
+    VecX fa(x.size());
+    two_passes.assemble_with_forces(x, 0.3, 1.7, fixed, a, fa);
+
+    CorotationalFem fused(mesh, test_material());
+    BsrMatrix b = fused.make_matrix();
+    VecX fb(x.size());
+    const double rotation_seconds = fused.rotate_and_assemble_with_forces(x, 0.3, 1.7, fixed, b, fb);
+    EXPECT_GE(rotation_seconds, 0.0);
+    EXPECT_EQ(fused.rotations(), two_passes.rotations());
+    EXPECT_EQ(b.values(), a.values());
+    EXPECT_TRUE(fb == fa);
+}

@@ -84,6 +84,15 @@ public:
     void assemble_with_forces(CRef<VecX> x, double stiffness_scale, double mass_scale,
                              const std::vector<char>& fixed, BsrMatrix& matrix, Eigen::Ref<VecX> forces);
 
+    /// update_rotations(x), then assemble_with_forces(), in one pass over the tets: each part
+    /// rotates a chunk of its tets and assembles it while its data is still in cache. The
+    /// results are bit for bit those of the two calls.
+    /// @return the part of the element loop's wall time that went to the rotations (the loop's
+    ///         wall time split in proportion to the time each half took inside the parts) [s]
+    /// @throws NumericalError naming the tet if its deformation gradient is not finite
+    double rotate_and_assemble_with_forces(CRef<VecX> x, double stiffness_scale, double mass_scale,
+                                           const std::vector<char>& fixed, BsrMatrix& matrix, Eigen::Ref<VecX> forces);
+
     /// Von Mises stress of each tet in the co-rotated frame at positions `x` [Pa], #T.
     VecX von_mises_stress(CRef<VecX> x) const;
 
@@ -116,6 +125,7 @@ private:
     };
     void run_pass(const Pass& pass);
     void part_pass(Index part, const Pass& pass);
+    void tet_range(Index t_begin, Index t_end, const Pass& pass, const Slots& slots);
     void one_tet(Index t, const Pass& pass, const Slots& slots);
     // Tets first .. first + count − 1 (count ≤ 4) as one AVX2 pack (detail/tet_pack_kernel.hpp).
     void tet_pack(Index first, int count, const Pass& pass, const Slots& slots);
@@ -153,6 +163,8 @@ private:
     std::vector<Index> m_interface_block_entries;
     std::vector<Index> m_interface_force_offsets;   // per interface node, into entries
     std::vector<Index> m_interface_force_entries;
+    // Seconds each part spent on rotations and on the rest in the last fused pass.
+    std::vector<std::array<double, 2>> m_part_seconds;
     // project_fixed's lists for the fixed-node flags it last saw: blocks in a row or column of
     // a fixed node, and the fixed rows.
     std::vector<char> m_projected_fixed;
