@@ -7,7 +7,8 @@
 # CORO_FUZZ       builds the libFuzzer targets in fuzz/ (clang only): every target is compiled
 #                 with -fsanitize=fuzzer-no-link,address,undefined (coverage for the fuzzer,
 #                 ASan and UBSan for the findings); the fuzz executables link -fsanitize=fuzzer.
-# Third-party libraries (TBB, VTK, Embree, METIS) come from Debian and are not instrumented.
+# Third-party libraries (TBB, VTK, Embree, METIS) come from Debian and are not instrumented;
+# for "thread", tools/tsan makes TBB's task hand-offs visible to TSan (tools/tsan/README.md).
 
 set(CORO_SANITIZE "" CACHE STRING
     "Sanitizers for every target: \"\" (none), \"address,undefined\" or \"thread\"")
@@ -37,6 +38,12 @@ if(CORO_SANITIZE)
   endif()
   if(CORO_FUZZ)
     add_compile_options(-fsanitize=fuzzer-no-link)
+  endif()
+  if(CORO_SANITIZE STREQUAL "thread")
+    # oneTBB's headers then tell the ITT collector of tools/tsan about each spawn, each task-tree
+    # join and each wait (call_itt_task_notify). Every translation unit must agree (the inline
+    # TBB code differs), hence the whole project.
+    add_compile_definitions(TBB_USE_PROFILING_TOOLS=2)
   endif()
   if(CMAKE_CXX_COMPILER_ID STREQUAL "GNU")
     # GCC 12's -Wmaybe-uninitialized gives false positives inside libstdc++ (std::function in
