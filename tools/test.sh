@@ -7,9 +7,9 @@
 #
 # --sanitize: RelWithDebInfo with CORO_SANITIZE=address,undefined (every target instrumented,
 #   UBSan reports are fatal). --tsan: RelWithDebInfo with CORO_SANITIZE=thread, running the tests
-#   that exercise TBB (partition, solver, fem, contact, sim, embree, cli, the cases). Debian's
-#   libtbb is not instrumented; tools/tsan makes its task hand-offs visible to TSan
-#   (tools/tsan/README.md).
+#   that exercise TBB (partition, solver, fem, contact, sim, embree, cli, the cases) and the
+#   check that a deliberate race is still reported (tsan.DeliberateRace). Debian's libtbb is
+#   not instrumented; tools/tsan makes its task hand-offs visible to TSan (tools/tsan/README.md).
 #   The TSan options (halt_on_error=1, the suppressions of tools/tsan.supp) are built into every
 #   executable of that build, so plain ctest in build-tsan/ behaves the same; TSAN_OPTIONS adds
 #   to them.
@@ -53,14 +53,14 @@ if [ "$mode" = asan ]; then
   exec ctest --output-on-failure -j "$(nproc)" "$@"
 else
   # The tests that run TBB parallel code, by GoogleTest suite (partition, solver, fem, contact,
-  # sim, embree), the corocontact command end to end (its thread-count determinism tests) and
-  # the example cases (whole simulations on all cores).
+  # sim, embree), the corocontact command end to end (its thread-count determinism tests), the
+  # example cases (whole simulations on all cores) and the deliberate race (tests/tsan).
   tsan_tests='^(DefaultNumParts|PartLayout|PartitionTets|PartitionTetsParts|PartitionedAssembly'
   tsan_tests+='|Axpy|BsrMatrix|Dot|PcgPreconditioners|PcgSolver'
   tsan_tests+='|CorotationalFem|ElementStiffness|PolarRotation'
   tsan_tests+='|AabbTree|ContactCandidates|DetectContacts|InsideTest|OverlappingPairs'
   tsan_tests+='|Body|CantileverTipLoad|ContactResponse|ImplicitEuler|StaticSolver'
   tsan_tests+='|CrossCheck|DetectContactsEmbree|EmbreeSceneSet'
-  tsan_tests+='|Corocontact|CorocontactDetect|CorocontactInfo|CorocontactRun)\.|^case\.'
+  tsan_tests+='|Corocontact|CorocontactDetect|CorocontactInfo|CorocontactRun)\.|^case\.|^tsan\.'
   exec ctest --output-on-failure -j "$(nproc)" -R "$tsan_tests" "$@"
 fi
