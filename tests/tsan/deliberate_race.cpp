@@ -1,7 +1,8 @@
 // A real data race inside a tbb::parallel_for body, for the TSan build only: proves that the
 // TBB support of tools/tsan (ITT collector, hooks, tools/tsan.supp) does not hide races in our
-// code. Two iterations, run by two threads at the same time, write one plain int. The ctest
-// `tsan.DeliberateRace` passes only if ThreadSanitizer reports that write (tests/tsan/CMakeLists.txt).
+// code. Two iterations, run by two threads, write one plain int with nothing ordering the
+// writes. The ctest `tsan.DeliberateRace` passes only if ThreadSanitizer reports the second
+// write (tests/tsan/CMakeLists.txt).
 #include <tbb/blocked_range.h>
 #include <tbb/global_control.h>
 #include <tbb/parallel_for.h>
@@ -28,25 +29,42 @@ bool itt_collector_loaded()
     return false;
 }
 
-// Each iteration waits (relaxed atomics: no happens-before for TSan) until both have started,
-// so that two threads run them, then writes g_shared. Returns false if no second thread came.
+// Waits, with relaxed loads only (no happens-before for TSan), until `done()` or 30 s passed.
+template <class Done>
+bool spin_until(Done done)
+{
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(30);
+    while (!done() && std::chrono::steady_clock::now() < deadline)
+        std::this_thread::yield();
+    return done();
+}
+
+// Both iterations first wait until both have started, so that two threads run them. Then
+// iteration 0 writes g_shared and iteration 1 writes it after that: not at the same moment,
+// which TSan can miss (each thread checks the shadow memory before the other one updates it),
+// and still without any synchronisation. Returns false if no second thread came.
 bool deliberate_race()
 {
     std::atomic<int> started{0};
-    std::atomic<bool> both{false};
+    std::atomic<bool> first_written{false};
+    std::atomic<bool> two_threads{false};
     tbb::parallel_for(
         tbb::blocked_range<int>(0, 2, 1),
         [&](const tbb::blocked_range<int>& r) {
             started.fetch_add(1, std::memory_order_relaxed);
-            const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(30);
-            while (started.load(std::memory_order_relaxed) < 2 && std::chrono::steady_clock::now() < deadline)
-                std::this_thread::yield();
-            if (started.load(std::memory_order_relaxed) == 2)
-                both.store(true, std::memory_order_relaxed);
-            g_shared = r.begin(); // the race
+            if (spin_until([&] { return started.load(std::memory_order_relaxed) == 2; }))
+                two_threads.store(true, std::memory_order_relaxed);
+            if (r.begin() == 0) {
+                g_shared = 0;
+                std::atomic_signal_fence(std::memory_order_seq_cst); // compiler order only
+                first_written.store(true, std::memory_order_relaxed);
+            } else {
+                spin_until([&] { return first_written.load(std::memory_order_relaxed); });
+                g_shared = 1; // the race: nothing orders this write after the first one
+            }
         },
         tbb::simple_partitioner());
-    return both.load(std::memory_order_relaxed);
+    return two_threads.load(std::memory_order_relaxed);
 }
 
 } // namespace
