@@ -105,7 +105,20 @@ FaceHit classify_exact(const double* A, const double* B, const double* C, const 
 /// The competing crossings of one axis: keeps those that can still be within the cutoff.
 class AxisHits {
 public:
+    AxisHits() = default;
     explicit AxisHits(double tie_relative) : m_tie(1.0 + tie_relative) {}
+    /// Back to no crossing, with this tie tolerance (cheaper than a new object: no copy of the
+    /// hit buffer).
+    void reset(double tie_relative)
+    {
+        m_count = 0;
+        m_any = false;
+        m_overflow = false;
+        m_closest = INF;
+        m_clean_closest = INF;
+        m_clean_face = -1;
+        m_tie = 1.0 + tie_relative;
+    }
 
     /// Largest distance along the axis still of interest.
     double cutoff() const { return m_closest * m_tie; }
@@ -117,7 +130,9 @@ public:
         m_any = true;
         if (h.kind != FaceHit::PARALLEL)
             m_closest = std::min(m_closest, h.distance + h.bound);
-        if (h.kind == FaceHit::CLEAN && h.distance + h.bound < m_clean_closest) {
+        // Of equally close clean crossings the lowest face wins, whatever the visiting order.
+        if (h.kind == FaceHit::CLEAN && (h.distance + h.bound < m_clean_closest ||
+                                         (h.distance + h.bound == m_clean_closest && face < m_clean_face))) {
             m_clean_closest = h.distance + h.bound;
             m_clean_face = face;
         }
@@ -156,6 +171,10 @@ public:
         return votes[1] > 0 ? AxisOutcome::INSIDE : AxisOutcome::OUTSIDE;
     }
 
+    /// More competing crossings than fit were met: the only result that may depend on the
+    /// order in which the faces came (decide() then says DEGENERATE).
+    bool overflowed() const { return m_overflow; }
+
     /// The closest clean crossing (distance plus rounding bound, face); +∞, −1 if none.
     double clean_closest() const { return m_clean_closest; }
     Index clean_face() const { return m_clean_face; }
@@ -180,7 +199,7 @@ private:
     double m_closest = INF;
     double m_clean_closest = INF;
     Index m_clean_face = -1;
-    double m_tie;
+    double m_tie = 1.0;
 };
 
 const double* vertex_ptr(const ContactSurface& s, Index v) { return s.vertices.data() + 3 * static_cast<std::ptrdiff_t>(v); }
@@ -285,48 +304,119 @@ AxisOutcome axis_test(const ContactSurface& surface, const Vec3& point, int axis
     return axis_test_exact(surface, point, axis, tolerances);
 }
 
-InsideTest inside_test(const ContactSurface& surface, const Vec3& point, DetectionMode mode,
-                       const std::vector<Index>& candidate_faces, const AxisRayTolerances& tolerances)
+namespace {
+
+/// Records an axis outcome in `result`; true when it decides (see inside_test()).
+bool settle(AxisOutcome outcome, int axis, const Crossing& crossing, DetectionMode mode, InsideTest& result)
+{
+    switch (outcome) {
+    case AxisOutcome::INSIDE:
+    case AxisOutcome::OUTSIDE:
+        result.inside = outcome == AxisOutcome::INSIDE;
+        result.deciding_axis = axis;
+        result.surface_distance_bound = crossing.bound;
+        result.crossing_face = crossing.face;
+        return true;
+    case AxisOutcome::ON_SURFACE:
+        result.on_surface = true;
+        result.deciding_axis = axis;
+        return true;
+    case AxisOutcome::NO_HIT:
+        if (mode != DetectionMode::PAPER) {
+            result.deciding_axis = axis;
+            return true;
+        }
+        return false;
+    case AxisOutcome::DEGENERATE:
+        return false;
+    }
+    return false;
+}
+
+/// inside_test() of a closed surface from axis `first_axis` on.
+InsideTest inside_test_from(const ContactSurface& surface, const Vec3& point, int first_axis, DetectionMode mode,
+                            const std::vector<Index>& candidate_faces, const AxisRayTolerances& tolerances)
 {
     InsideTest result;
-    if (!surface.closed) {
-        result.inside = winding_number(surface.vertices, surface.faces, point) > 0.5;
-        result.deciding_axis = 3;
-        return result;
-    }
-    for (int axis = 0; axis < 3; ++axis) {
+    for (int axis = first_axis; axis < 3; ++axis) {
         Crossing crossing;
         const AxisOutcome outcome =
             mode == DetectionMode::EXACT         ? axis_test_exact(surface, point, axis, tolerances, &crossing)
             : mode == DetectionMode::BRUTE_FORCE ? axis_test_brute_force(surface, point, axis, tolerances, &crossing)
                                                  : axis_test_paper(surface, point, axis, candidate_faces, tolerances);
-        switch (outcome) {
-        case AxisOutcome::INSIDE:
-        case AxisOutcome::OUTSIDE:
-            result.inside = outcome == AxisOutcome::INSIDE;
-            result.deciding_axis = axis;
-            result.surface_distance_bound = crossing.bound;
-            result.crossing_face = crossing.face;
+        if (settle(outcome, axis, crossing, mode, result))
             return result;
-        case AxisOutcome::ON_SURFACE:
-            result.on_surface = true;
-            result.deciding_axis = axis;
-            return result;
-        case AxisOutcome::NO_HIT:
-            if (mode != DetectionMode::PAPER) {
-                result.deciding_axis = axis;
-                return result;
-            }
-            break;
-        case AxisOutcome::DEGENERATE:
-            break;
-        }
     }
     if (mode != DetectionMode::PAPER) {
         result.inside = winding_number(surface.vertices, surface.faces, point) > 0.5;
         result.deciding_axis = 3;
     }
     return result;
+}
+
+/// Exact mode, closed surface: the x axes of up to AXIS_PACKET points in one tree walk; the
+/// points that x does not decide go on alone (y, z, winding number).
+void inside_tests_packet(const ContactSurface& surface, const Vec3* points, int count,
+                         const AxisRayTolerances& tol, InsideTest* results)
+{
+    constexpr int N = AabbTree::AXIS_PACKET;
+    AxisHits hits[N];
+    Frame frames[N];
+    for (int q = 0; q < count; ++q) {
+        hits[q].reset(tol.tie_relative);
+        frames[q] = frame_of(points[q], 0);
+    }
+    const Tris& faces = surface.faces;
+    surface.tree.faces_on_axis_lines(points, count, 0, 0.0, [&](int q, Index face) {
+        AxisHits& h = hits[q];
+        h.add(classify_exact(vertex_ptr(surface, faces(face, 0)), vertex_ptr(surface, faces(face, 1)),
+                             vertex_ptr(surface, faces(face, 2)), frames[q], tol),
+              face);
+        return h.cutoff();
+    });
+    for (int q = 0; q < count; ++q) {
+        InsideTest& result = results[q];
+        result = InsideTest();
+        Crossing crossing;
+        AxisOutcome outcome;
+        if (hits[q].overflowed()) { // the one order-dependent case: the single walk's answer
+            outcome = axis_test_exact(surface, points[q], 0, tol, &crossing);
+        } else {
+            outcome = hits[q].decide();
+            crossing = {hits[q].clean_closest(), hits[q].clean_face()};
+        }
+        if (!settle(outcome, 0, crossing, DetectionMode::EXACT, result))
+            result = inside_test_from(surface, points[q], 1, DetectionMode::EXACT, {}, tol);
+    }
+}
+
+} // namespace
+
+InsideTest inside_test(const ContactSurface& surface, const Vec3& point, DetectionMode mode,
+                       const std::vector<Index>& candidate_faces, const AxisRayTolerances& tolerances)
+{
+    if (!surface.closed) {
+        InsideTest result;
+        result.inside = winding_number(surface.vertices, surface.faces, point) > 0.5;
+        result.deciding_axis = 3;
+        return result;
+    }
+    return inside_test_from(surface, point, 0, mode, candidate_faces, tolerances);
+}
+
+void inside_tests(const ContactSurface& surface, const Vec3* points, Index count, DetectionMode mode,
+                  const std::vector<Index>& candidate_faces, const AxisRayTolerances& tolerances,
+                  InsideTest* results)
+{
+    if (mode != DetectionMode::EXACT || !surface.closed) {
+        for (Index i = 0; i < count; ++i)
+            results[i] = inside_test(surface, points[i], mode, candidate_faces, tolerances);
+        return;
+    }
+    for (Index i = 0; i < count; i += AabbTree::AXIS_PACKET) {
+        const int n = static_cast<int>(std::min<Index>(AabbTree::AXIS_PACKET, count - i));
+        inside_tests_packet(surface, points + i, n, tolerances, results + i);
+    }
 }
 
 } // namespace coro

@@ -69,10 +69,15 @@ std::vector<ContactPoint> run_detection(const std::vector<ContactSurface>& surfa
                               // block, so the work does not depend on the scheduling (and the
                               // answers do not depend on the hints at all).
                               Index hint_face = -1;
+                              Vec3 block_points[VERTEX_BLOCK];
+                              InsideTest results[VERTEX_BLOCK];
+                              for (Index i = block.begin; i < block.end; ++i)
+                                  block_points[i - block.begin] =
+                                      body.vertices.row(pair.vertices[static_cast<std::size_t>(i)]).transpose();
+                              inside(pair, block_points, block.end - block.begin, results);
                               for (Index i = block.begin; i < block.end; ++i) {
                                   const Index v = pair.vertices[static_cast<std::size_t>(i)];
-                                  const Vec3 p = body.vertices.row(v).transpose();
-                                  const InsideTest result = inside(pair, p);
+                                  const InsideTest& result = results[i - block.begin];
                                   ++counts.candidate_vertices;
                                   counts.on_surface += result.on_surface ? 1 : 0;
                                   counts.winding_fallbacks += result.deciding_axis == 3 ? 1 : 0;
@@ -219,9 +224,9 @@ std::vector<ContactPoint> detect_contacts(const std::vector<ContactSurface>& sur
     const std::vector<PairCandidates> candidates = contact_candidates(surfaces, settings.mode);
     return run_detection(
         surfaces, candidates, count_pairs(candidates),
-        [&](const PairCandidates& pair, const Vec3& p) {
-            return inside_test(surfaces[static_cast<std::size_t>(pair.other)], p, settings.mode, pair.faces,
-                               settings.tolerances);
+        [&](const PairCandidates& pair, const Vec3* points, Index count, InsideTest* results) {
+            inside_tests(surfaces[static_cast<std::size_t>(pair.other)], points, count, settings.mode, pair.faces,
+                         settings.tolerances, results);
         },
         settings.contact_data, stats);
 }
@@ -233,7 +238,11 @@ std::vector<ContactPoint> detect_contacts(const std::vector<ContactSurface>& sur
     const std::vector<PairCandidates> candidates = contact_candidates(surfaces, DetectionMode::EXACT);
     return run_detection(
         surfaces, candidates, count_pairs(candidates),
-        [&](const PairCandidates& pair, const Vec3& p) { return inside(pair.other, p); }, contact_data, stats);
+        [&](const PairCandidates& pair, const Vec3* points, Index count, InsideTest* results) {
+            for (Index i = 0; i < count; ++i)
+                results[i] = inside(pair.other, points[i]);
+        },
+        contact_data, stats);
 }
 
 } // namespace coro

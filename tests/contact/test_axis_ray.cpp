@@ -6,8 +6,10 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
+#include <utility>
 
 using namespace coro;
 using namespace coro::test;
@@ -402,4 +404,101 @@ TEST(AxisTest, CompetingCrossingsThatDisagreeDoNotDecide)
     const InsideTest r = exact(b, p);
     EXPECT_TRUE(r.inside);
     EXPECT_EQ(r.deciding_axis, 1);
+}
+
+namespace {
+
+/// inside_tests() (packets of up to AabbTree::AXIS_PACKET x-axis lines walked together) gives
+/// every point the same result as inside_test(), field for field, for every packet size: the
+/// points are cut into runs of 1, 2, …, 9 so that packets of all widths (and a run longer than
+/// one packet) occur. Returns how many points x did not decide.
+int expect_packets_match_single(const ContactSurface& b, const std::vector<Vec3>& points)
+{
+    std::vector<InsideTest> packed(points.size());
+    std::size_t begin = 0;
+    for (Index run = 1; begin < points.size(); run = run % 9 + 1) {
+        const Index n = std::min<Index>(run, static_cast<Index>(points.size() - begin));
+        inside_tests(b, points.data() + begin, n, DetectionMode::EXACT, NO_FACES, TOL, packed.data() + begin);
+        begin += static_cast<std::size_t>(n);
+    }
+    int not_x = 0;
+    for (std::size_t i = 0; i < points.size(); ++i) {
+        const InsideTest single = exact(b, points[i]);
+        const InsideTest& p = packed[i];
+        EXPECT_EQ(p.inside, single.inside) << "point " << i << " (" << points[i].transpose() << ")";
+        EXPECT_EQ(p.on_surface, single.on_surface) << "point " << i;
+        EXPECT_EQ(p.deciding_axis, single.deciding_axis) << "point " << i;
+        EXPECT_EQ(p.surface_distance_bound, single.surface_distance_bound) << "point " << i; // bitwise
+        EXPECT_EQ(p.crossing_face, single.crossing_face) << "point " << i;
+        not_x += single.deciding_axis != 0 ? 1 : 0;
+    }
+    return not_x;
+}
+
+/// The vertices of `a` in the order detection uses (AabbTree::vertices_in_box over b's box).
+std::vector<Vec3> candidate_points(const ContactSurface& a, const ContactSurface& b)
+{
+    std::vector<Index> order;
+    a.tree.vertices_in_box(a.vertices, a.tree.bounds().intersection(b.tree.bounds()), order);
+    std::vector<Vec3> points;
+    for (const Index v : order)
+        points.push_back(a.vertices.row(v).transpose());
+    return points;
+}
+
+} // namespace
+
+TEST(InsideTests, PacketsEqualSingleQueriesOnDeformedSpheres)
+{
+    const MeshBall a = mesh_ball(Vec3(0, 0, 0), 1.0, 10, 17.0, "A");
+    const MeshBall b = mesh_ball(Vec3(0.8, 0.3, -0.2), 0.9, 10, -31.0, "B");
+    for (const auto& [x, y] : {std::pair{&a, &b}, std::pair{&b, &a}}) {
+        std::vector<Vec3> points = candidate_points(x->surface, y->surface);
+        ASSERT_GT(points.size(), 100u);
+        expect_packets_match_single(y->surface, points);
+        std::mt19937 rng(5); // scattered packets too: lines far apart share little of the walk
+        std::shuffle(points.begin(), points.end(), rng);
+        expect_packets_match_single(y->surface, points);
+    }
+}
+
+TEST(InsideTests, PacketsEqualSingleQueriesOnRandomPointsAndNonConvexBodies)
+{
+    TetMesh bar = make_box(Vec3(0, -0.5, -0.5), Vec3(4, 0.5, 0.5), {16, 4, 4});
+    bar.rest_positions = twist_and_bend(bar.rest_positions, 0.6, 2.0);
+    const SurfaceMesh torus_mesh = make_torus(Vec3(0.1, -0.2, 0.3), 1.0, 0.35, 48, 24);
+    const ContactSurface bodies[] = {surface_of(bar, "bar"), surface_of(torus_mesh, "torus")};
+    std::mt19937 rng(8);
+    for (const ContactSurface& b : bodies) {
+        const Aabb box = b.tree.bounds();
+        std::vector<Vec3> points;
+        for (int q = 0; q < 1500; ++q)
+            points.push_back(random_point(box.min, box.max, rng));
+        // Runs of close points, as detection sends them, mixed inside and outside.
+        for (int q = 0; q < 200; ++q) {
+            const Vec3 c = random_point(box.min, box.max, rng);
+            for (int k = 0; k < 8; ++k)
+                points.push_back(c + random_point(Vec3::Constant(-0.05), Vec3::Constant(0.05), rng));
+        }
+        expect_packets_match_single(b, points);
+    }
+}
+
+TEST(InsideTests, PacketsEqualSingleQueriesOnDegenerateBoxes)
+{
+    // Vertices on faces, edges and vertices of B, and on planes parallel to the axes: packets
+    // mix decided, on-surface and degenerate (x does not decide) points.
+    const ContactSurface b = box_surface({Vec3(0, 0, 0), Vec3(1, 1, 1), {2, 2, 2}}, "B");
+    const BoxSpec cases[] = {
+        {Vec3(1, 0, 0), Vec3(2, 1, 1), {2, 2, 2}},       {Vec3(1, 1, 1), Vec3(2, 2, 2), {1, 1, 1}},
+        {Vec3(1, 1, 0.25), Vec3(2, 2, 1.25), {2, 2, 2}}, {Vec3(0.5, 0.5, 0.5), Vec3(1.5, 1.5, 1.5), {2, 2, 2}},
+        {Vec3(-0.5, -0.5, -0.5), Vec3(1.5, 1.5, 1.5), {4, 4, 4}}, {Vec3(0, 0, 1), Vec3(1, 1, 2), {3, 3, 1}},
+    };
+    int not_x = 0;
+    for (const BoxSpec& spec : cases) {
+        const ContactSurface a = box_surface(spec, "A");
+        not_x += expect_packets_match_single(b, candidate_points(a, b));
+        not_x += expect_packets_match_single(a, candidate_points(b, a));
+    }
+    EXPECT_GT(not_x, 20);
 }

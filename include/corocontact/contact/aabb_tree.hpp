@@ -6,6 +6,9 @@
 #include <corocontact/contact/aabb.hpp>
 
 #include <xmmintrin.h>
+#if defined(__AVX2__)
+#include <immintrin.h>
+#endif
 
 #include <algorithm>
 #include <cmath>
@@ -72,6 +75,23 @@ public:
     /// visited nearer first; the order depends only on the tree and `point` (deterministic).
     template <class Visit>
     void faces_on_axis_line(const Vec3& point, int axis, double tolerance, Visit&& visit) const;
+
+    /// Queries per packet of faces_on_axis_lines().
+    static constexpr int AXIS_PACKET = 8;
+
+    /// faces_on_axis_line() for a packet of up to AXIS_PACKET parallel lines (same `axis`),
+    /// walked together: at each node each line gets the child mask the single walk would give
+    /// it (its own float interval, its own cutoff), a child is entered if some line needs it,
+    /// and `visit(lane, face)` is called only for the lines (lanes 0..count−1 of `points`) whose
+    /// own mask holds the face and which pass the same exact double box test. `visit` returns
+    /// the lane's largest distance along the axis still of interest, as for the single walk.
+    /// Each line meets every face that the single walk could give it within its final cutoff;
+    /// the order of the visits differs (children are ordered by the gaps of the packet's first
+    /// active line), so a visitor must not depend on it. Cheaper than count single walks when
+    /// the lines are close together (their paths through the tree share most nodes).
+    /// @param[in] points  count points, 1 ≤ count ≤ AXIS_PACKET
+    template <class Visit>
+    void faces_on_axis_lines(const Vec3* points, int count, int axis, double tolerance, Visit&& visit) const;
 
     /// Nearest point of the surface to `point`.
     struct Nearest {
@@ -239,6 +259,152 @@ void AabbTree::faces_on_axis_line(const Vec3& point, int axis, double tolerance,
             }
             stack[top] = node.child[far];
             stack_gap[top++] = gaps[far];
+            m &= ~(1 << far);
+        }
+    }
+}
+
+namespace detail {
+/// Eight floats (one per line of a packet): one AVX register, or two SSE registers without AVX2.
+#if defined(__AVX2__)
+struct Float8 {
+    __m256 x;
+    static Float8 load(const float* p) { return {_mm256_load_ps(p)}; }
+    static Float8 broadcast(const float* p) { return {_mm256_broadcast_ss(p)}; }
+    void store(float* p) const { _mm256_store_ps(p, x); }
+    friend Float8 operator-(Float8 a, Float8 b) { return {_mm256_sub_ps(a.x, b.x)}; }
+    friend Float8 max(Float8 a, Float8 b) { return {_mm256_max_ps(a.x, b.x)}; }
+    friend Float8 operator&(Float8 a, Float8 b) { return {_mm256_and_ps(a.x, b.x)}; }
+    friend Float8 le(Float8 a, Float8 b) { return {_mm256_cmp_ps(a.x, b.x, _CMP_LE_OQ)}; }
+    friend Float8 ge(Float8 a, Float8 b) { return {_mm256_cmp_ps(a.x, b.x, _CMP_GE_OQ)}; }
+    static Float8 zero() { return {_mm256_setzero_ps()}; }
+    int mask() const { return _mm256_movemask_ps(x); }
+};
+#else
+struct Float8 {
+    __m128 x0, x1;
+    static Float8 load(const float* p) { return {_mm_load_ps(p), _mm_load_ps(p + 4)}; }
+    static Float8 broadcast(const float* p)
+    {
+        const __m128 v = _mm_load1_ps(p);
+        return {v, v};
+    }
+    void store(float* p) const
+    {
+        _mm_store_ps(p, x0);
+        _mm_store_ps(p + 4, x1);
+    }
+    friend Float8 operator-(Float8 a, Float8 b) { return {_mm_sub_ps(a.x0, b.x0), _mm_sub_ps(a.x1, b.x1)}; }
+    friend Float8 max(Float8 a, Float8 b) { return {_mm_max_ps(a.x0, b.x0), _mm_max_ps(a.x1, b.x1)}; }
+    friend Float8 operator&(Float8 a, Float8 b) { return {_mm_and_ps(a.x0, b.x0), _mm_and_ps(a.x1, b.x1)}; }
+    friend Float8 le(Float8 a, Float8 b) { return {_mm_cmple_ps(a.x0, b.x0), _mm_cmple_ps(a.x1, b.x1)}; }
+    friend Float8 ge(Float8 a, Float8 b) { return {_mm_cmpge_ps(a.x0, b.x0), _mm_cmpge_ps(a.x1, b.x1)}; }
+    static Float8 zero() { return {_mm_setzero_ps(), _mm_setzero_ps()}; }
+    int mask() const { return _mm_movemask_ps(x0) | (_mm_movemask_ps(x1) << 4); }
+};
+#endif
+} // namespace detail
+
+template <class Visit>
+void AabbTree::faces_on_axis_lines(const Vec3* points, int count, int axis, double tolerance, Visit&& visit) const
+{
+    static_assert(AXIS_PACKET == 8, "the packet walk uses 8-float registers");
+    if (m_nodes.empty() || count <= 0)
+        return;
+    const int u = (axis + 1) % 3, v = (axis + 2) % 3;
+    // Per line, the same float intervals as faces_on_axis_line; unused lanes copy line 0 and
+    // are never active.
+    alignas(32) float pu_lo[8], pu_hi[8], pv_lo[8], pv_hi[8], pa_lo[8], pa_hi[8];
+    alignas(32) float cutoff_f[8];
+    double pu[8], pv[8], cutoff[8];
+    for (int q = 0; q < 8; ++q) {
+        const Vec3& p = points[q < count ? q : 0];
+        pu[q] = p[u];
+        pv[q] = p[v];
+        pu_lo[q] = detail::float_down(pu[q] - tolerance);
+        pu_hi[q] = detail::float_up(pu[q] + tolerance);
+        pv_lo[q] = detail::float_down(pv[q] - tolerance);
+        pv_hi[q] = detail::float_up(pv[q] + tolerance);
+        pa_lo[q] = detail::float_down(p[axis]);
+        pa_hi[q] = detail::float_up(p[axis]);
+        cutoff[q] = std::numeric_limits<double>::infinity();
+        cutoff_f[q] = std::numeric_limits<float>::infinity();
+    }
+    using detail::Float8;
+    const Float8 qu_lo = Float8::load(pu_lo), qu_hi = Float8::load(pu_hi);
+    const Float8 qv_lo = Float8::load(pv_lo), qv_hi = Float8::load(pv_hi);
+    const Float8 qa_lo = Float8::load(pa_lo), qa_hi = Float8::load(pa_hi);
+    const Float8 zero = Float8::zero();
+
+    // Stack entries: a node, the lines that need it, and their gaps to its box.
+    Index stack[STACK_SIZE];
+    unsigned stack_lines[STACK_SIZE];
+    alignas(32) float stack_gap[STACK_SIZE][8];
+    int top = 0;
+    stack[top] = 0;
+    stack_lines[top] = (1u << count) - 1u;
+    zero.store(stack_gap[top++]);
+    alignas(32) float gaps[4][8];
+    unsigned lines[4];
+    while (top > 0) {
+        --top;
+        Float8 cut = Float8::load(cutoff_f);
+        const unsigned active =
+            stack_lines[top] & static_cast<unsigned>(le(Float8::load(stack_gap[top]), cut).mask());
+        if (active == 0)
+            continue;
+        const WideNode& node = m_nodes[static_cast<std::size_t>(stack[top])];
+        for (int k = 0; k < node.count; ++k) {
+            const Float8 crossed = (le(Float8::broadcast(&node.lo[u][k]), qu_hi) &
+                                    ge(Float8::broadcast(&node.hi[u][k]), qu_lo)) &
+                                   (le(Float8::broadcast(&node.lo[v][k]), qv_hi) &
+                                    ge(Float8::broadcast(&node.hi[v][k]), qv_lo));
+            const Float8 gap = max(max(Float8::broadcast(&node.lo[axis][k]) - qa_hi,
+                                       qa_lo - Float8::broadcast(&node.hi[axis][k])),
+                                   zero);
+            gap.store(gaps[k]);
+            lines[k] = active & static_cast<unsigned>((crossed & le(gap, cut)).mask());
+        }
+        // The node's faces now, in lane order, each for the lines that need it; then its child
+        // nodes, pushed farther first (by the gaps of the first line that needs each).
+        for (int m = node.face_mask & ((1 << node.count) - 1); m != 0; m &= m - 1) {
+            const int k = __builtin_ctz(static_cast<unsigned>(m));
+            if (lines[k] == 0)
+                continue;
+            const std::size_t slot = static_cast<std::size_t>(-1 - node.child[k]);
+            const Aabb& fb = m_face_boxes[slot]; // the exact test
+            const Index face = m_order[slot];
+            for (unsigned l = lines[k]; l != 0; l &= l - 1) {
+                const int q = __builtin_ctz(l);
+                if (pu[q] < fb.min[u] - tolerance || pu[q] > fb.max[u] + tolerance ||
+                    pv[q] < fb.min[v] - tolerance || pv[q] > fb.max[v] + tolerance)
+                    continue;
+                if (static_cast<double>(gaps[k][q]) > cutoff[q] * (1.0 + 0x1p-20))
+                    continue;
+                const double limit = static_cast<double>(visit(q, face));
+                if (limit < cutoff[q]) {
+                    cutoff[q] = limit;
+                    cutoff_f[q] = detail::float_threshold(limit);
+                }
+            }
+        }
+        int m = 0;
+        for (int k = 0; k < node.count; ++k)
+            m |= (lines[k] != 0 && !((node.face_mask >> k) & 1)) ? (1 << k) : 0;
+        while (m != 0) {
+            int far = __builtin_ctz(static_cast<unsigned>(m));
+            float far_gap = gaps[far][__builtin_ctz(lines[far])];
+            for (int rest = m & (m - 1); rest != 0; rest &= rest - 1) {
+                const int k = __builtin_ctz(static_cast<unsigned>(rest));
+                const float g = gaps[k][__builtin_ctz(lines[k])];
+                if (g > far_gap) {
+                    far = k;
+                    far_gap = g;
+                }
+            }
+            stack[top] = node.child[far];
+            stack_lines[top] = lines[far];
+            Float8::load(gaps[far]).store(stack_gap[top++]);
             m &= ~(1 << far);
         }
     }

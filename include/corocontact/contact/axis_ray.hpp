@@ -89,4 +89,15 @@ struct InsideTest {
 InsideTest inside_test(const ContactSurface& surface, const Vec3& point, DetectionMode mode,
                        const std::vector<Index>& candidate_faces, const AxisRayTolerances& tolerances);
 
+/// inside_test() of `count` points against the same surface, results[i] for points[i], equal to
+/// inside_test() field for field. In exact mode, for a closed surface, the x axes of up to
+/// AabbTree::AXIS_PACKET consecutive points are tested in one tree walk
+/// (AabbTree::faces_on_axis_lines), which pays when the points are close together (e.g. in the
+/// order of AabbTree::vertices_in_box); the points x does not decide continue alone.
+/// @param[in]  points   `count` points
+/// @param[out] results  `count` results
+void inside_tests(const ContactSurface& surface, const Vec3* points, Index count, DetectionMode mode,
+                  const std::vector<Index>& candidate_faces, const AxisRayTolerances& tolerances,
+                  InsideTest* results);
+
 } // namespace coro
