@@ -9,6 +9,7 @@
 //
 //   bench_contact [--threads N] [google benchmark flags]
 //   bench_contact [--threads N] --profile exact|paper|brute [--resolution R] [--frames N] [--no-depth]
+//       [--no-sharing]
 //       a plain loop of N frames (refit + detection) for callgrind, see run_profile
 #include <corocontact/contact/detector.hpp>
 #include <corocontact/core/primitives.hpp>
@@ -155,7 +156,7 @@ void BM_FrameInsideOnlyExact(benchmark::State& state) { detect(state, DetectionM
 // --toggle-collect='*profile_frames*' (instructions per frame = collected / frames; the
 // inclusive costs of profile_refit and profile_detect split them). Prints wall times too.
 struct ProfileTotals {
-    double refit_s = 0.0, detect_s = 0.0, queries = 0.0, inside = 0.0;
+    double refit_s = 0.0, detect_s = 0.0, queries = 0.0, inside = 0.0, by_neighbour = 0.0;
 };
 
 __attribute__((noinline)) void profile_refit(std::vector<ContactSurface>& surfaces, const std::vector<Positions>& nodes)
@@ -188,23 +189,27 @@ __attribute__((noinline)) ProfileTotals profile_frames(const Scene& s, const Det
         totals.detect_s += std::chrono::duration<double>(t2 - t1).count();
         totals.queries += stats.candidate_vertices;
         totals.inside += stats.inside;
+        totals.by_neighbour += stats.by_neighbour;
     }
     return totals;
 }
 
-int run_profile(Index resolution, const std::string& mode, bool depth, int frames)
+int run_profile(Index resolution, const std::string& mode, bool depth, bool share, int frames)
 {
     DetectionSettings settings;
     settings.mode = mode == "paper" ? DetectionMode::PAPER
                     : mode == "brute" ? DetectionMode::BRUTE_FORCE
                                       : DetectionMode::EXACT;
     settings.contact_data = depth;
+    settings.share_empty_cubes = share;
     const Scene& s = scene(resolution);
     const ProfileTotals t = profile_frames(s, settings, frames);
     std::printf("profile: %s mode, %s, resolution %d (%d tets in 2 spheres), %d frames\n", mode.c_str(),
                 depth ? "with depth" : "inside only", resolution, s.tets, frames);
-    std::printf("per frame: refit %.1f us, detection %.1f us, %.0f vertex queries, %.0f inside\n",
-                1e6 * t.refit_s / frames, 1e6 * t.detect_s / frames, t.queries / frames, t.inside / frames);
+    std::printf("per frame: refit %.1f us, detection %.1f us, %.0f vertex queries, %.0f inside, %.0f by a "
+                "neighbour's empty cube\n",
+                1e6 * t.refit_s / frames, 1e6 * t.detect_s / frames, t.queries / frames, t.inside / frames,
+                t.by_neighbour / frames);
     return 0;
 }
 
@@ -225,7 +230,7 @@ int main(int argc, char** argv)
     // --threads N (as in the corocontact command) is ours; the rest goes to Google Benchmark.
     std::unique_ptr<tbb::global_control> threads;
     std::vector<char*> args;
-    bool profile = false, depth = true;
+    bool profile = false, depth = true, share = true;
     Index resolution = 26;
     int frames = FRAMES;
     std::string mode = "exact";
@@ -252,10 +257,14 @@ int main(int argc, char** argv)
             depth = false;
             continue;
         }
+        if (std::strcmp(argv[i], "--no-sharing") == 0) {
+            share = false;
+            continue;
+        }
         args.push_back(argv[i]);
     }
     if (profile)
-        return run_profile(resolution, mode, depth, frames);
+        return run_profile(resolution, mode, depth, share, frames);
     int count = static_cast<int>(args.size());
     benchmark::Initialize(&count, args.data());
     if (benchmark::ReportUnrecognizedArguments(count, args.data()))

@@ -81,6 +81,7 @@ std::vector<ContactPoint> run_detection(const std::vector<ContactSurface>& surfa
                                   ++counts.candidate_vertices;
                                   counts.on_surface += result.on_surface ? 1 : 0;
                                   counts.winding_fallbacks += result.deciding_axis == 3 ? 1 : 0;
+                                  counts.by_neighbour += result.deciding_axis == DECIDED_BY_NEIGHBOUR ? 1 : 0;
                                   if (result.inside) {
                                       ++counts.inside;
                                       if (contact_data) {
@@ -128,6 +129,7 @@ std::vector<ContactPoint> run_detection(const std::vector<ContactSurface>& surfa
             sum.inside += s.inside;
             sum.winding_fallbacks += s.winding_fallbacks;
             sum.on_surface += s.on_surface;
+            sum.by_neighbour += s.by_neighbour;
         }
         *stats = sum;
     }
@@ -225,8 +227,11 @@ std::vector<ContactPoint> detect_contacts(const std::vector<ContactSurface>& sur
     return run_detection(
         surfaces, candidates, count_pairs(candidates),
         [&](const PairCandidates& pair, const Vec3* points, Index count, InsideTest* results) {
-            inside_tests(surfaces[static_cast<std::size_t>(pair.other)], points, count, settings.mode, pair.faces,
-                         settings.tolerances, results);
+            const ContactSurface& other = surfaces[static_cast<std::size_t>(pair.other)];
+            if (settings.share_empty_cubes)
+                inside_tests_shared(other, points, count, settings.mode, pair.faces, settings.tolerances, results);
+            else
+                inside_tests(other, points, count, settings.mode, pair.faces, settings.tolerances, results);
         },
         settings.contact_data, stats);
 }

@@ -115,6 +115,31 @@ TEST(DetectContacts, OneAndTwoThreadsGiveIdenticalContacts)
     }
 }
 
+TEST(DetectContacts, SharedEmptyCubesChangeNothingButTheWork)
+{
+    // Deep overlap: most candidate vertices lie in empty cubes of tested neighbours.
+    std::vector<ContactSurface> surfaces = pile_scene();
+    surfaces.push_back(deformed_ball(Vec3(0.3, 0.1, 0.0), 0.9, 12, 0.06, "deep5"));
+    DetectionSettings shared, each;
+    each.share_empty_cubes = false;
+    DetectionStats s1, s2;
+    const auto a = detect_contacts(surfaces, shared, &s1);
+    const auto b = detect_contacts(surfaces, each, &s2);
+    ASSERT_EQ(a.size(), b.size());
+    for (std::size_t i = 0; i < a.size(); ++i) {
+        ASSERT_EQ(key(a[i]), key(b[i])) << "contact " << i;
+        ASSERT_EQ(a[i].depth, b[i].depth) << "contact " << i; // bitwise
+        ASSERT_EQ(a[i].normal, b[i].normal) << "contact " << i;
+        ASSERT_EQ(a[i].face, b[i].face) << "contact " << i;
+        ASSERT_EQ(a[i].barycentric, b[i].barycentric) << "contact " << i;
+    }
+    EXPECT_EQ(keys(a), brute_force_contacts(surfaces));
+    EXPECT_EQ(s1.candidate_vertices, s2.candidate_vertices);
+    EXPECT_EQ(s1.inside, s2.inside);
+    EXPECT_GT(s1.by_neighbour, s1.candidate_vertices / 4);
+    EXPECT_EQ(s2.by_neighbour, 0);
+}
+
 TEST(DetectContacts, DepthAndNormalOfSmallBoxesPushedIntoALargeBox)
 {
     // B = [0, 10]³. A small box enters B's +x face by 0.2, another its −y face by 0.3, a third

@@ -93,6 +93,24 @@ public:
     template <class Visit>
     void faces_on_axis_lines(const Vec3* points, int count, int axis, double tolerance, Visit&& visit) const;
 
+    /// Half-size h of a cube centred at `point` that meets no face box, so no point of the
+    /// surface: the L∞ distance from `point` to the nearest face box, capped at `max_half_size`,
+    /// lowered by a margin that covers the rounding of point ± h, so the closed box
+    /// [point − h, point + h] computed in double is disjoint from every face box. Every point of
+    /// that box is joined to `point` by a segment that does not meet the surface: for a closed
+    /// surface it is inside exactly when `point` is.
+    /// Branch and bound over the boxes, nearer children first; the walk stops, returning 0, as
+    /// soon as h is known to be below `min_half_size`.
+    /// @param[in] min_half_size  smallest useful h (≥ 0), same length unit as the positions
+    /// @param[in] max_half_size  largest h wanted (≥ min_half_size); the whole walk is cheaper
+    ///                           with a smaller cap
+    /// @param[in,out] hint       null, or a token of a face box tried first (−1: none) that is
+    ///                           set to the nearest face box met: passing it from one call to the
+    ///                           next for nearby points makes the walk shorter (the answer does
+    ///                           not depend on it)
+    /// @return h, 0 ≤ h ≤ max_half_size, or 0
+    double empty_cube(const Vec3& point, double min_half_size, double max_half_size, Index* hint = nullptr) const;
+
     /// Nearest point of the surface to `point`.
     struct Nearest {
         Index face = -1;

@@ -68,7 +68,9 @@ AxisOutcome axis_test(const ContactSurface& surface, const Vec3& point, int axis
 /// exact mode).
 struct InsideTest {
     bool inside = false;
-    int deciding_axis = -1;        ///< 0..2, or 3 for the winding-number fallback, −1: no axis hit
+    /// 0..2, or 3 for the winding-number fallback, −1: no axis hit; DECIDED_BY_NEIGHBOUR
+    /// (inside_tests_shared() only): the answer of a neighbour whose empty cube holds the point
+    int deciding_axis = -1;
     bool on_surface = false;       ///< exact modes: the point lies on the surface (then not inside)
     /// Exact modes, decided by an axis: the distance along that axis to the closest clean face
     /// crossing plus its rounding bound, so some point of the surface lies within it (an upper
@@ -77,6 +79,9 @@ struct InsideTest {
     /// Exact modes, decided by an axis: the face of that closest clean crossing (−1 otherwise).
     Index crossing_face = -1;
 };
+
+/// InsideTest::deciding_axis of a point that took a neighbour's answer (inside_tests_shared()).
+constexpr int DECIDED_BY_NEIGHBOUR = 4;
 
 /// Paper mode: axes x, y, z until one has a hit (INSIDE or OUTSIDE); no hit on all three ⇒
 /// outside (deciding_axis −1).
@@ -99,5 +104,23 @@ InsideTest inside_test(const ContactSurface& surface, const Vec3& point, Detecti
 void inside_tests(const ContactSurface& surface, const Vec3* points, Index count, DetectionMode mode,
                   const std::vector<Index>& candidate_faces, const AxisRayTolerances& tolerances,
                   InsideTest* results);
+
+/// inside_tests() in exact mode for points that come close together (e.g. a block of
+/// AabbTree::vertices_in_box), sharing the work between neighbours. Walking the points in order,
+/// a point that lies in the empty cube of an earlier one (AabbTree::empty_cube: a box that no
+/// face of the surface meets, so every point of it is joined to its centre without crossing the
+/// surface) takes that point's answer; the others are tested (inside_tests(), in packets) and get
+/// an empty cube of their own when it would reach the next points. For a closed surface the
+/// answers equal inside_test()'s: `inside` everywhere, and every field for the tested points.
+/// A point that took a neighbour's answer gets deciding_axis DECIDED_BY_NEIGHBOUR, on_surface
+/// false (it lies off the surface), the neighbour's crossing_face and, as surface_distance_bound,
+/// the neighbour's plus their distance (some point of the surface lies within it).
+/// Another mode, or a surface that is not closed: inside_tests() as it is.
+/// @param[in]  points   `count` points
+/// @param[out] results  `count` results
+/// @return the number of points that took a neighbour's answer
+Index inside_tests_shared(const ContactSurface& surface, const Vec3* points, Index count, DetectionMode mode,
+                          const std::vector<Index>& candidate_faces, const AxisRayTolerances& tolerances,
+                          InsideTest* results);
 
 } // namespace coro
