@@ -7,6 +7,7 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <cstdint>
 #include <limits>
 #include <tuple>
 
@@ -26,14 +27,70 @@ struct Block {
     Index begin, end;
 };
 
+/// The points of `slots` flagged in `inside`, sorted by (body, vertex, other). `candidates` is
+/// ordered by (body, other) and slot offsets[k] + i belongs to its pair k's candidate i, so a
+/// stable counting sort by vertex over each body's pairs gives that order in O(points + vertices);
+/// a body with few points against many vertices sorts keys instead.
+std::vector<ContactPoint> sorted_points(const std::vector<ContactSurface>& surfaces,
+                                        const std::vector<PairCandidates>& candidates,
+                                        const std::vector<std::size_t>& offsets, const std::vector<ContactPoint>& slots,
+                                        const std::vector<unsigned char>& inside, std::size_t total)
+{
+    std::vector<ContactPoint> points;
+    points.reserve(total);
+    std::vector<Index> start;
+    std::vector<std::size_t> order;
+    std::vector<std::pair<std::uint64_t, std::size_t>> keys;
+    for (std::size_t first = 0; first < candidates.size();) {
+        const Index body = candidates[first].body;
+        std::size_t last = first;
+        std::size_t count = 0;
+        for (; last < candidates.size() && candidates[last].body == body; ++last)
+            for (std::size_t i = offsets[last]; i < offsets[last + 1]; ++i)
+                count += inside[i];
+        const auto vertices = static_cast<std::size_t>(surfaces[static_cast<std::size_t>(body)].vertices.rows());
+        if (8 * count >= vertices) {
+            start.assign(vertices + 1, 0);
+            for (std::size_t k = first; k < last; ++k)
+                for (std::size_t i = offsets[k]; i < offsets[k + 1]; ++i)
+                    start[static_cast<std::size_t>(slots[i].vertex) + 1] += inside[i];
+            for (std::size_t v = 0; v < vertices; ++v)
+                start[v + 1] += start[v];
+            order.resize(count);
+            for (std::size_t k = first; k < last; ++k) // others ascending: stable within a vertex
+                for (std::size_t i = offsets[k]; i < offsets[k + 1]; ++i)
+                    if (inside[i])
+                        order[static_cast<std::size_t>(start[static_cast<std::size_t>(slots[i].vertex)]++)] = i;
+            for (const std::size_t i : order)
+                points.push_back(slots[i]);
+        } else {
+            keys.clear();
+            for (std::size_t k = first; k < last; ++k)
+                for (std::size_t i = offsets[k]; i < offsets[k + 1]; ++i)
+                    if (inside[i])
+                        keys.emplace_back((static_cast<std::uint64_t>(slots[i].vertex) << 32) |
+                                              static_cast<std::uint32_t>(slots[i].other),
+                                          i);
+            std::sort(keys.begin(), keys.end());
+            for (const auto& key : keys)
+                points.push_back(slots[key.second]);
+        }
+        first = last;
+    }
+    return points;
+}
+
 template <class Inside>
 std::vector<ContactPoint> run_detection(const std::vector<ContactSurface>& surfaces,
                                         const std::vector<PairCandidates>& candidates, Index pairs,
                                         const Inside& inside, bool contact_data, DetectionStats* stats)
 {
+    // One slot per candidate vertex: pair k's vertex i at offsets[k] + i.
+    std::vector<std::size_t> offsets(candidates.size() + 1, 0);
     std::vector<Block> blocks;
     for (std::size_t k = 0; k < candidates.size(); ++k) {
         const auto n = static_cast<Index>(candidates[k].vertices.size());
+        offsets[k + 1] = offsets[k] + static_cast<std::size_t>(n);
         for (Index b = 0; b < n; b += VERTEX_BLOCK)
             blocks.push_back({k, b, std::min(n, b + VERTEX_BLOCK)});
     }
@@ -54,11 +111,11 @@ std::vector<ContactPoint> run_detection(const std::vector<ContactSurface>& surfa
                           });
     }
 
-    tbb::enumerable_thread_specific<std::vector<ContactPoint>> local_points;
+    std::vector<ContactPoint> slots(offsets.back());
+    std::vector<unsigned char> is_inside(offsets.back(), 0);
     tbb::enumerable_thread_specific<DetectionStats> local_stats;
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, blocks.size(), 1),
                       [&](const tbb::blocked_range<std::size_t>& range) {
-                          std::vector<ContactPoint>& points = local_points.local();
                           DetectionStats& counts = local_stats.local();
                           for (std::size_t b = range.begin(); b < range.end(); ++b) {
                               const Block& block = blocks[b];
@@ -82,58 +139,37 @@ std::vector<ContactPoint> run_detection(const std::vector<ContactSurface>& surfa
                                   counts.on_surface += result.on_surface ? 1 : 0;
                                   counts.winding_fallbacks += result.deciding_axis == 3 ? 1 : 0;
                                   counts.by_neighbour += result.deciding_axis == DECIDED_BY_NEIGHBOUR ? 1 : 0;
-                                  if (result.inside) {
-                                      ++counts.inside;
-                                      if (contact_data) {
-                                          points.push_back(contact_point(surfaces, pair.body, v, pair.other,
-                                                                         result.surface_distance_bound, hint_face));
-                                          hint_face = points.back().face;
-                                      } else {
-                                          ContactPoint c;
-                                          c.body = pair.body;
-                                          c.vertex = v;
-                                          c.other = pair.other;
-                                          points.push_back(c);
-                                      }
+                                  if (!result.inside)
+                                      continue;
+                                  ++counts.inside;
+                                  const std::size_t slot = offsets[block.pair] + static_cast<std::size_t>(i);
+                                  is_inside[slot] = 1;
+                                  ContactPoint& c = slots[slot];
+                                  if (contact_data) {
+                                      c = contact_point(surfaces, pair.body, v, pair.other,
+                                                        result.surface_distance_bound, hint_face);
+                                      hint_face = c.face;
+                                  } else {
+                                      c.body = pair.body;
+                                      c.vertex = v;
+                                      c.other = pair.other;
                                   }
                               }
                           }
                       });
 
-    // Sorted by (body, vertex, other), which is unique per point: small keys are sorted, the
-    // points moved once.
-    struct Key {
-        Index body, vertex, other;
-        const ContactPoint* point;
-    };
-    std::vector<Key> keys;
-    std::size_t total = 0;
-    for (const auto& part : local_points)
-        total += part.size();
-    keys.reserve(total);
-    for (const auto& part : local_points)
-        for (const ContactPoint& c : part)
-            keys.push_back({c.body, c.vertex, c.other, &c});
-    std::sort(keys.begin(), keys.end(), [](const Key& a, const Key& b) {
-        return std::tie(a.body, a.vertex, a.other) < std::tie(b.body, b.vertex, b.other);
-    });
-    std::vector<ContactPoint> points;
-    points.reserve(total);
-    for (const Key& k : keys)
-        points.push_back(*k.point);
-    if (stats) {
-        DetectionStats sum;
-        sum.pairs = pairs;
-        for (const DetectionStats& s : local_stats) {
-            sum.candidate_vertices += s.candidate_vertices;
-            sum.inside += s.inside;
-            sum.winding_fallbacks += s.winding_fallbacks;
-            sum.on_surface += s.on_surface;
-            sum.by_neighbour += s.by_neighbour;
-        }
-        *stats = sum;
+    DetectionStats sum;
+    sum.pairs = pairs;
+    for (const DetectionStats& s : local_stats) {
+        sum.candidate_vertices += s.candidate_vertices;
+        sum.inside += s.inside;
+        sum.winding_fallbacks += s.winding_fallbacks;
+        sum.on_surface += s.on_surface;
+        sum.by_neighbour += s.by_neighbour;
     }
-    return points;
+    if (stats)
+        *stats = sum;
+    return sorted_points(surfaces, candidates, offsets, slots, is_inside, static_cast<std::size_t>(sum.inside));
 }
 
 Index count_pairs(const std::vector<PairCandidates>& candidates) { return static_cast<Index>(candidates.size() / 2); }
