@@ -328,7 +328,7 @@ void BM_AxisRayFrameInsideOnly(benchmark::State& state)
 // loaded machine slows them alike), median wall time per frame of each part. See main().
 struct PathTimes {
     std::vector<double> refit, detect; // seconds per frame
-    double queries = 0.0, inside = 0.0;
+    double queries = 0.0, inside = 0.0, by_neighbour = 0.0;
 };
 
 double median(std::vector<double> v)
@@ -350,9 +350,9 @@ double seconds(F&& f)
 void summary(Index resolution, int frames, std::size_t threads)
 {
     const Scene& sc = scene(resolution);
-    enum Path { EXACT, EXACT_INSIDE, PAPER, PAPER_INSIDE, BRUTE_INSIDE, EMBREE, EMBREE_INSIDE, N_PATHS };
-    const char* names[N_PATHS] = {"exact",  "exact, inside only",  "paper", "paper, inside only",
-                                  "brute force, inside only", "embree", "embree, inside only"};
+    enum Path { EXACT, EXACT_INSIDE, EXACT_EACH, PAPER, PAPER_INSIDE, BRUTE_INSIDE, EMBREE, EMBREE_INSIDE, N_PATHS };
+    const char* names[N_PATHS] = {"exact",  "exact, inside only",  "exact, inside, no sharing", "paper",
+                                  "paper, inside only", "brute force, inside only", "embree", "embree, inside only"};
     std::vector<PathTimes> t(N_PATHS);
     std::vector<std::vector<ContactSurface>> surfaces(N_PATHS, sc.surfaces[0]);
     detail::EmbreeSceneSet scenes(sc.surfaces[0], detail::EmbreeBuild::REFIT);
@@ -371,6 +371,7 @@ void summary(Index resolution, int frames, std::size_t threads)
             }));
             DetectionSettings settings;
             settings.contact_data = p == EXACT || p == PAPER || p == EMBREE;
+            settings.share_empty_cubes = p != EXACT_EACH;
             settings.mode = p == PAPER || p == PAPER_INSIDE ? DetectionMode::PAPER
                             : p == BRUTE_INSIDE             ? DetectionMode::BRUTE_FORCE
                                                             : DetectionMode::EXACT;
@@ -386,6 +387,7 @@ void summary(Index resolution, int frames, std::size_t threads)
             }
             pt.queries += stats.candidate_vertices;
             pt.inside += stats.inside;
+            pt.by_neighbour += stats.by_neighbour;
         }
     }
     const double update = median(embree_update);
@@ -393,8 +395,8 @@ void summary(Index resolution, int frames, std::size_t threads)
                 "median wall time per frame over %d frames (brute force %d) ==\n",
                 sc.tets_per_sphere, static_cast<long>(sc.surfaces[0][0].faces.rows()), threads, frames,
                 brute_frames);
-    std::printf("%-26s %10s %10s %10s %12s %10s %10s\n", "path", "refit ms", "update ms", "detect ms",
-                "frame ms", "queries", "Mqueries/s");
+    std::printf("%-26s %10s %10s %10s %12s %10s %10s %10s\n", "path", "refit ms", "update ms", "detect ms",
+                "frame ms", "queries", "Mqueries/s", "shared");
     std::vector<double> frame(N_PATHS);
     for (int p = 0; p < N_PATHS; ++p) {
         const PathTimes& pt = t[static_cast<std::size_t>(p)];
@@ -402,8 +404,8 @@ void summary(Index resolution, int frames, std::size_t threads)
         const double r = median(pt.refit), d = median(pt.detect), u = embree ? update : 0.0;
         frame[static_cast<std::size_t>(p)] = r + u + d;
         const double n = pt.queries / static_cast<double>(pt.detect.size());
-        std::printf("%-26s %10.3f %10.3f %10.3f %12.3f %10.0f %10.2f\n", names[p], 1e3 * r, 1e3 * u, 1e3 * d,
-                    1e3 * (r + u + d), n, 1e-6 * n / d);
+        std::printf("%-26s %10.3f %10.3f %10.3f %12.3f %10.0f %10.2f %10.0f\n", names[p], 1e3 * r, 1e3 * u,
+                    1e3 * d, 1e3 * (r + u + d), n, 1e-6 * n / d, pt.by_neighbour / static_cast<double>(pt.detect.size()));
     }
     // The reference point: Embree's update plus one plain first-hit ray (+x) per
     // candidate vertex, in parallel: not an inside test (no all-hit gathering, no degenerate
@@ -434,7 +436,8 @@ void summary(Index resolution, int frames, std::size_t threads)
     std::printf("refit = copy of the surface vertices + our AABB-tree refit (the Embree path needs it too: mid "
                 "phase, depth); update = Embree's per-frame refit (vertex upload + rtcCommitScene); detect = broad, "
                 "mid, narrow phase (+ nearest-point depth and normal unless 'inside only'), sorted output; "
-                "Mqueries/s = candidate vertices / detect time\n");
+                "Mqueries/s = candidate vertices / detect time; shared = vertices that took a tested neighbour's "
+                "answer through its empty cube (DetectionSettings::share_empty_cubes; 'no sharing' tests each)\n");
     std::printf("ratio exact/Embree per frame, with depth:   %.3f  (refit+detect vs refit+update+detect)\n",
                 frame[EXACT] / frame[EMBREE]);
     std::printf("ratio exact/Embree per frame, inside only:  %.3f\n", frame[EXACT_INSIDE] / frame[EMBREE_INSIDE]);

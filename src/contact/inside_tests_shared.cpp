@@ -11,7 +11,7 @@ namespace {
 constexpr Index CHUNK = 128;
 // A new point's empty cube is walked for only when it would hold one of the next LOOKAHEAD
 // points: a smaller one would decide nothing but its own centre.
-constexpr int LOOKAHEAD = 4;
+constexpr int LOOKAHEAD = 2;
 
 struct EmptyCube {
     Vec3 lo, hi;
