@@ -16,7 +16,7 @@ namespace coro {
 namespace {
 
 // Candidate vertices per task: large pairs are split, small ones stay whole.
-constexpr Index VERTEX_BLOCK = 128;
+constexpr Index VERTEX_BLOCK = 256;
 
 /// make_contact_point with the hints of AabbTree::nearest (same answer, faster).
 ContactPoint contact_point(const std::vector<ContactSurface>& surfaces, Index body, Index vertex, Index other,

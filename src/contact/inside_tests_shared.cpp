@@ -8,7 +8,7 @@ namespace coro {
 namespace {
 
 // Points handled together: a detector block; the arrays below live on the stack.
-constexpr Index CHUNK = 128;
+constexpr Index CHUNK = 256;
 // A new point's empty cube is walked for only when it would hold one of the next LOOKAHEAD
 // points: a smaller one would decide nothing but its own centre.
 constexpr int LOOKAHEAD = 2;
