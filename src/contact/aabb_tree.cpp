@@ -615,17 +615,7 @@ AabbTree::Nearest AabbTree::nearest(CRef<Positions> vertices, const Vec3& point,
                 best.barycentric = q.barycentric;
             }
         }
-        for (int m = mask & ~node.face_mask; m != 0;) {
-            int far = __builtin_ctz(static_cast<unsigned>(m));
-            for (int rest = m & (m - 1); rest != 0; rest &= rest - 1) {
-                const int k = __builtin_ctz(static_cast<unsigned>(rest));
-                if (d2[k] > d2[far])
-                    far = k;
-            }
-            stack[top] = node.child[far];
-            stack_d2[top++] = d2[far];
-            m &= ~(1 << far);
-        }
+        push_children(node, mask, d2, stack, stack_d2, top);
     }
     if (best.face < 0) // a bound below the true distance (an invalid hint): search again without it
         return bound_d2 < std::numeric_limits<double>::infinity()

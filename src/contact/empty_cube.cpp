@@ -75,18 +75,7 @@ double AabbTree::empty_cube(const Vec3& point, double min_half_size, double max_
                     threshold = detail::float_threshold(best);
                 }
             }
-            // Child nodes, the nearest on top of the stack.
-            for (int m = mask & ~node.face_mask; m != 0;) {
-                int far = __builtin_ctz(static_cast<unsigned>(m));
-                for (int rest = m & (m - 1); rest != 0; rest &= rest - 1) {
-                    const int k = __builtin_ctz(static_cast<unsigned>(rest));
-                    if (gaps[k] > gaps[far])
-                        far = k;
-                }
-                stack[top] = node.child[far];
-                stack_gap[top++] = gaps[far];
-                m &= ~(1 << far);
-            }
+            push_children(node, mask, gaps, stack, stack_gap, top); // the nearest on top
         }
     }
     // Every face box lies at L∞ distance D ≥ best/(1 + 2⁻⁵³) (computed distances err by one

@@ -1,5 +1,7 @@
 #include "contact_scenes.hpp"
 
+#include <corocontact/core/primitives.hpp>
+
 #include <cmath>
 #include <stdexcept>
 
@@ -109,6 +111,27 @@ Vec3 random_point(const Vec3& min, const Vec3& max, std::mt19937& rng)
 {
     std::uniform_real_distribution<double> unit(0.0, 1.0);
     return min + Vec3(unit(rng), unit(rng), unit(rng)).cwiseProduct(max - min);
+}
+
+std::vector<Vec3> candidate_points(const ContactSurface& a, const ContactSurface& b)
+{
+    std::vector<Index> order;
+    a.tree.vertices_in_box(a.vertices, a.tree.bounds().intersection(b.tree.bounds()), order);
+    std::vector<Vec3> points;
+    for (const Index v : order)
+        points.push_back(a.vertices.row(v).transpose());
+    return points;
+}
+
+ContactSurface deformed_ball(const Vec3& center, double radius, Index resolution, double wobble, const std::string& name)
+{
+    TetMesh mesh = make_sphere(center, radius, resolution);
+    for (Index v = 0; v < mesh.num_vertices(); ++v) {
+        const Vec3 d = mesh.rest_positions.row(v).transpose() - center;
+        mesh.rest_positions.row(v) =
+            (center + d * (1.0 + wobble * std::sin(3 * d.x()) * std::cos(2 * d.y() + d.z()))).transpose();
+    }
+    return surface_of(mesh, name);
 }
 
 } // namespace coro::test

@@ -8,6 +8,7 @@
 
 #include <random>
 #include <string>
+#include <vector>
 
 namespace coro::test {
 
@@ -32,6 +33,14 @@ bool ray_parity_inside(CRef<Positions> vertices, const Tris& faces, const Vec3& 
 
 /// Random triangles in [0, 1]³ of mixed sizes (a "soup", not a closed surface).
 SurfaceMesh random_triangles(int count, std::mt19937& rng);
+
+/// The vertices of `a` in the order detection sends them (AabbTree::vertices_in_box over the
+/// overlap of a's and b's boxes).
+std::vector<Vec3> candidate_points(const ContactSurface& a, const ContactSurface& b);
+
+/// The surface of a tet-mesh sphere whose radius wobbles by a relative `wobble` (smooth, so the
+/// surface stays closed and star-shaped for small wobbles).
+ContactSurface deformed_ball(const Vec3& center, double radius, Index resolution, double wobble, const std::string& name);
 
 /// Uniform random point in a box.
 Vec3 random_point(const Vec3& min, const Vec3& max, std::mt19937& rng);

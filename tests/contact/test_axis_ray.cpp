@@ -435,17 +435,6 @@ int expect_packets_match_single(const ContactSurface& b, const std::vector<Vec3>
     return not_x;
 }
 
-/// The vertices of `a` in the order detection uses (AabbTree::vertices_in_box over b's box).
-std::vector<Vec3> candidate_points(const ContactSurface& a, const ContactSurface& b)
-{
-    std::vector<Index> order;
-    a.tree.vertices_in_box(a.vertices, a.tree.bounds().intersection(b.tree.bounds()), order);
-    std::vector<Vec3> points;
-    for (const Index v : order)
-        points.push_back(a.vertices.row(v).transpose());
-    return points;
-}
-
 } // namespace
 
 TEST(InsideTests, PacketsEqualSingleQueriesOnDeformedSpheres)

@@ -22,17 +22,6 @@ ContactSurface box_surface(const Vec3& min, const Vec3& max, const std::array<In
     return surface_of(make_box(min, max, cells), name);
 }
 
-ContactSurface deformed_ball(const Vec3& center, double radius, Index resolution, double wobble, const std::string& name)
-{
-    TetMesh mesh = make_sphere(center, radius, resolution);
-    for (Index v = 0; v < mesh.num_vertices(); ++v) {
-        const Vec3 d = mesh.rest_positions.row(v).transpose() - center;
-        mesh.rest_positions.row(v) =
-            (center + d * (1.0 + wobble * std::sin(3 * d.x()) * std::cos(2 * d.y() + d.z()))).transpose();
-    }
-    return surface_of(mesh, name);
-}
-
 using Key = std::tuple<Index, Index, Index>;
 Key key(const ContactPoint& c) { return {c.body, c.vertex, c.other}; }
 

@@ -67,34 +67,12 @@ Index expect_shared_matches_single(const ContactSurface& b, const std::vector<Ve
     return by_neighbour;
 }
 
-/// The vertices of `a` in the order detection uses (AabbTree::vertices_in_box over b's box).
-std::vector<Vec3> candidate_points(const ContactSurface& a, const ContactSurface& b)
-{
-    std::vector<Index> order;
-    a.tree.vertices_in_box(a.vertices, a.tree.bounds().intersection(b.tree.bounds()), order);
-    std::vector<Vec3> points;
-    for (const Index v : order)
-        points.push_back(a.vertices.row(v).transpose());
-    return points;
-}
-
-ContactSurface ball(const Vec3& center, double radius, Index resolution, double wobble, const std::string& name)
-{
-    TetMesh mesh = make_sphere(center, radius, resolution);
-    for (Index v = 0; v < mesh.num_vertices(); ++v) {
-        const Vec3 d = mesh.rest_positions.row(v).transpose() - center;
-        mesh.rest_positions.row(v) =
-            (center + d * (1.0 + wobble * std::sin(3 * d.x()) * std::cos(2 * d.y() + d.z()))).transpose();
-    }
-    return surface_of(mesh, name);
-}
-
 } // namespace
 
 TEST(InsideTestsShared, DeepOverlapOfDeformedSpheresSharesMostAnswers)
 {
-    const ContactSurface a = ball(Vec3(0, 0, 0), 1.0, 14, 0.06, "A");
-    const ContactSurface b = ball(Vec3(0.8, 0.1, -0.05), 0.9, 12, 0.05, "B");
+    const ContactSurface a = deformed_ball(Vec3(0, 0, 0), 1.0, 14, 0.06, "A");
+    const ContactSurface b = deformed_ball(Vec3(0.8, 0.1, -0.05), 0.9, 12, 0.05, "B");
     for (const auto& [x, y] : {std::pair{&a, &b}, std::pair{&b, &a}}) {
         const std::vector<Vec3> points = candidate_points(*x, *y);
         ASSERT_GT(points.size(), 400u);

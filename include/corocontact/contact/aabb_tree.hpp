@@ -150,6 +150,23 @@ private:
         Index count;    ///< children used (2..4; 1 only for a one-face tree), lanes 0..count−1
         Index face_mask; ///< bit k set: child k is a face
     };
+    /// Pushes the child nodes of `node` selected by `mask` with their bounds `keys` (one per
+    /// lane), the largest first, so that the nearest is popped first.
+    static void push_children(const WideNode& node, int mask, const float* keys, Index* stack, float* stack_keys,
+                              int& top)
+    {
+        for (int m = mask & ~node.face_mask; m != 0;) {
+            int far = __builtin_ctz(static_cast<unsigned>(m));
+            for (int rest = m & (m - 1); rest != 0; rest &= rest - 1) {
+                const int k = __builtin_ctz(static_cast<unsigned>(rest));
+                if (keys[k] > keys[far])
+                    far = k;
+            }
+            stack[top] = node.child[far];
+            stack_keys[top++] = keys[far];
+            m &= ~(1 << far);
+        }
+    }
     static constexpr int MAX_DEPTH = 60;
     static constexpr int STACK_SIZE = 3 * MAX_DEPTH + 4;
     Index build_node(const std::vector<Vec3>& centroids, Index begin, Index end, int depth);
@@ -268,17 +285,7 @@ void AabbTree::faces_on_axis_line(const Vec3& point, int axis, double tolerance,
                 }
             }
         }
-        for (int m = mask & ~node.face_mask; m != 0;) {
-            int far = __builtin_ctz(static_cast<unsigned>(m));
-            for (int rest = m & (m - 1); rest != 0; rest &= rest - 1) {
-                const int k = __builtin_ctz(static_cast<unsigned>(rest));
-                if (gaps[k] > gaps[far])
-                    far = k;
-            }
-            stack[top] = node.child[far];
-            stack_gap[top++] = gaps[far];
-            m &= ~(1 << far);
-        }
+        push_children(node, mask, gaps, stack, stack_gap, top);
     }
 }
 
