@@ -436,8 +436,9 @@ void summary(Index resolution, int frames, std::size_t threads)
     std::printf("refit = copy of the surface vertices + our AABB-tree refit (the Embree path needs it too: mid "
                 "phase, depth); update = Embree's per-frame refit (vertex upload + rtcCommitScene); detect = broad, "
                 "mid, narrow phase (+ nearest-point depth and normal unless 'inside only'), sorted output; "
-                "Mqueries/s = candidate vertices / detect time; shared = vertices that took a tested neighbour's "
-                "answer through its empty cube (DetectionSettings::share_empty_cubes; 'no sharing' tests each)\n");
+                "Mqueries/s = candidate vertices / detect time; shared = vertices that took a neighbour's "
+                "answer through an empty cube or a clear segment (DetectionSettings::share_empty_cubes; 'no sharing' "
+                "tests each)\n");
     std::printf("ratio exact/Embree per frame, with depth:   %.3f  (refit+detect vs refit+update+detect)\n",
                 frame[EXACT] / frame[EMBREE]);
     std::printf("ratio exact/Embree per frame, inside only:  %.3f\n", frame[EXACT_INSIDE] / frame[EMBREE_INSIDE]);

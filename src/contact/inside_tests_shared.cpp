@@ -9,8 +9,8 @@ namespace {
 
 // Points handled together: a detector block; the arrays below live on the stack.
 constexpr Index CHUNK = 256;
-// A new point's empty cube is walked for only when it would hold one of the next LOOKAHEAD
-// points: a smaller one would decide nothing but its own centre.
+// A new point's empty cube is walked for only when it would hold the previous point or one of
+// the next LOOKAHEAD points: a smaller one would decide nothing but its own centre.
 constexpr int LOOKAHEAD = 2;
 
 struct EmptyCube {
@@ -32,7 +32,7 @@ Index shared_chunk(const ContactSurface& surface, const Vec3* points, int count,
         box.extend(points[i]);
     EmptyCube cubes[CHUNK];
     int n_cubes = 0;
-    int decider[CHUNK]; // the point whose test decides point i (i itself when tested)
+    int decider[CHUNK]; // the earlier point whose answer point i takes (i itself when tested)
     int tested[CHUNK];
     int n_tested = 0;
     Index hint = -1;
@@ -46,18 +46,28 @@ Index shared_chunk(const ContactSurface& surface, const Vec3* points, int count,
             }
         if (decider[i] != i)
             continue;
-        tested[n_tested++] = i;
-        // The smallest cube worth walking for reaches one of the next points; the largest
-        // needed holds every point of the chunk.
-        double reach = INFINITY;
+        // Outside every cube: its own cube, walked for when it would reach the previous point or
+        // one of the next ones (the largest needed holds every point of the chunk), joins it to
+        // the previous point; else a segment to that point which meets no face does; else a test.
+        const double reach_previous = i > 0 ? chebyshev(points[i - 1], p) : INFINITY;
+        double reach = reach_previous;
         for (int k = i + 1; k < std::min(count, i + 1 + LOOKAHEAD); ++k)
             reach = std::min(reach, chebyshev(points[k], p));
-        if (reach == INFINITY)
-            continue;
-        const double cover = std::max((p - box.min).maxCoeff(), (box.max - p).maxCoeff());
-        const double h = surface.tree.empty_cube(p, reach, std::max(reach, cover), &hint);
-        if (h > 0.0)
-            cubes[n_cubes++] = {p.array() - h, p.array() + h, i};
+        if (reach < INFINITY) {
+            const double cover = std::max((p - box.min).maxCoeff(), (box.max - p).maxCoeff());
+            const double h = surface.tree.empty_cube(p, reach, std::max(reach, cover), &hint);
+            if (h > 0.0) {
+                cubes[n_cubes++] = {p.array() - h, p.array() + h, i};
+                if (i > 0 && cubes[n_cubes - 1].holds(points[i - 1])) {
+                    decider[i] = i - 1;
+                    continue;
+                }
+            }
+        }
+        if (i > 0 && surface.tree.segment_clear(surface.vertices, points[i - 1], p))
+            decider[i] = i - 1;
+        else
+            tested[n_tested++] = i;
     }
 
     Vec3 tested_points[CHUNK];

@@ -106,7 +106,7 @@ TEST(DetectContacts, OneAndTwoThreadsGiveIdenticalContacts)
 
 TEST(DetectContacts, SharedEmptyCubesChangeNothingButTheWork)
 {
-    // Deep overlap: most candidate vertices lie in empty cubes of tested neighbours.
+    // Deep overlap: most candidate vertices take a neighbour's answer (empty cubes, clear segments).
     std::vector<ContactSurface> surfaces = pile_scene();
     surfaces.push_back(deformed_ball(Vec3(0.3, 0.1, 0.0), 0.9, 12, 0.06, "deep5"));
     DetectionSettings shared, each;

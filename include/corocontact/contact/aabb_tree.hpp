@@ -111,6 +111,15 @@ public:
     /// @return h, 0 ≤ h ≤ max_half_size, or 0
     double empty_cube(const Vec3& point, double min_half_size, double max_half_size, Index* hint = nullptr) const;
 
+    /// Whether the closed segment [p, q] is shown to meet no face of the surface: every face
+    /// whose box meets the segment's box is shown disjoint from the segment by signs beyond their
+    /// rounding bounds (both ends strictly on one side of the face's plane, or the segment's line
+    /// strictly passing the face outside two of its edges). Then p and q are both inside or both
+    /// outside a closed surface. False when that cannot be shown: the segment crosses or touches
+    /// the surface, or a sign is within rounding (never true for a segment that meets a face).
+    /// @param[in] vertices  the positions the tree was last built or refit with
+    bool segment_clear(CRef<Positions> vertices, const Vec3& p, const Vec3& q) const;
+
     /// Nearest point of the surface to `point`.
     struct Nearest {
         Index face = -1;

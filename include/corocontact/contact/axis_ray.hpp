@@ -69,7 +69,8 @@ AxisOutcome axis_test(const ContactSurface& surface, const Vec3& point, int axis
 struct InsideTest {
     bool inside = false;
     /// 0..2, or 3 for the winding-number fallback, −1: no axis hit; DECIDED_BY_NEIGHBOUR
-    /// (inside_tests_shared() only): the answer of a neighbour whose empty cube holds the point
+    /// (inside_tests_shared() only): the answer of a neighbour joined to the point by a segment
+    /// that meets no face (an empty cube, or AabbTree::segment_clear)
     int deciding_axis = -1;
     bool on_surface = false;       ///< exact modes: the point lies on the surface (then not inside)
     /// Exact modes, decided by an axis: the distance along that axis to the closest clean face
@@ -106,12 +107,17 @@ void inside_tests(const ContactSurface& surface, const Vec3* points, Index count
                   InsideTest* results);
 
 /// inside_tests() in exact mode for points that come close together (e.g. a block of
-/// AabbTree::vertices_in_box), sharing the work between neighbours. Walking the points in order,
-/// a point that lies in the empty cube of an earlier one (AabbTree::empty_cube: a box that no
-/// face of the surface meets, so every point of it is joined to its centre without crossing the
-/// surface) takes that point's answer; the others are tested (inside_tests(), in packets) and get
-/// an empty cube of their own when it would reach the next points. For a closed surface the
-/// answers equal inside_test()'s: `inside` everywhere, and every field for the tested points.
+/// AabbTree::vertices_in_box), sharing the work between neighbours: a point joined to an earlier
+/// one by a segment that meets no face of the surface takes that point's answer. Walking the
+/// points in order, a point takes the answer of
+///  - the centre of an earlier empty cube that holds it (AabbTree::empty_cube: a box that no face
+///    box meets, so every point of it is joined to its centre without crossing the surface);
+///  - else the previous point, when its own empty cube (walked for when it would reach the
+///    previous point or one of the next ones) holds that point, or AabbTree::segment_clear shows
+///    that the segment between them meets no face;
+///  - else it is tested (inside_tests(), in packets).
+/// For a closed surface the answers equal inside_test()'s: `inside` everywhere, and every field
+/// for the tested points.
 /// A point that took a neighbour's answer gets deciding_axis DECIDED_BY_NEIGHBOUR, on_surface
 /// false (it lies off the surface), the neighbour's crossing_face and, as surface_distance_bound,
 /// the neighbour's plus their distance (some point of the surface lies within it).

@@ -28,8 +28,9 @@ struct DetectionStats {
     Index inside = 0;
     Index winding_fallbacks = 0; ///< exact mode: vertices undecided on all three axes
     Index on_surface = 0;        ///< exact mode: vertices lying on the other surface (not inside)
-    Index by_neighbour = 0;      ///< exact mode: vertices that took a tested neighbour's answer
-                                 ///< through its empty cube (inside_tests_shared), no test of their own
+    Index by_neighbour = 0;      ///< exact mode: vertices that took a neighbour's answer through an
+                                 ///< empty cube or a clear segment (inside_tests_shared), no test of
+                                 ///< their own
 };
 
 struct DetectionSettings {
@@ -39,8 +40,10 @@ struct DetectionSettings {
     /// query each). When false those fields keep their defaults (depth 0, face −1): enough for
     /// inside/outside counts and cross-checks.
     bool contact_data = true;
-    /// Exact mode: neighbouring candidate vertices share work (inside_tests_shared): a vertex in
-    /// the empty cube of a tested neighbour takes its answer, the same as its own test would give.
+    /// Exact mode: neighbouring candidate vertices share work (inside_tests_shared): a vertex
+    /// joined to a neighbour by a segment that meets no face of the other surface (an empty cube
+    /// around one of them, or AabbTree::segment_clear) takes its answer, the same as its own test
+    /// would give.
     /// False: every candidate vertex is tested (for measurements and cross-checks).
     bool share_empty_cubes = true;
 };
