@@ -2,6 +2,8 @@
 
 #include <corocontact/contact/winding_number.hpp>
 
+#include "orientation.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -10,12 +12,10 @@ namespace coro {
 
 namespace {
 
-constexpr double EPS = std::numeric_limits<double>::epsilon();
+using detail::EPS;
+using detail::ORIENT2D_BOUND;
+using detail::ORIENT3D_BOUND;
 constexpr double INF = std::numeric_limits<double>::infinity();
-// Rounding bounds, relative to the sum of the absolute products (Shewchuk's static filters
-// ccwerrboundA ≈ 3ε/2 and o3derrboundA ≈ 7ε/2, ε = 2^-53, taken with a safety factor).
-constexpr double ORIENT2D_BOUND = 3.0 * EPS;
-constexpr double ORIENT3D_BOUND = 8.0 * EPS;
 
 /// One face against the axis line of a point (exact modes).
 struct FaceHit {
@@ -54,13 +54,9 @@ FaceHit classify_exact(const double* A, const double* B, const double* C, const 
     const double w2 = au * bv - av * bu, e2 = ORIENT2D_BOUND * (std::abs(au * bv) + std::abs(av * bu));
 
     // Face normal n = (B − A) × (C − A); n_a is the projected (doubled) area Af.
-    const double d1[3] = {B[0] - A[0], B[1] - A[1], B[2] - A[2]};
-    const double d2[3] = {C[0] - A[0], C[1] - A[1], C[2] - A[2]};
-    const double p0 = d1[1] * d2[2], p1 = d1[2] * d2[1];
-    const double p2 = d1[2] * d2[0], p3 = d1[0] * d2[2];
-    const double p4 = d1[0] * d2[1], p5 = d1[1] * d2[0];
-    const double n[3] = {p0 - p1, p2 - p3, p4 - p5};
-    const double perm[3] = {std::abs(p0) + std::abs(p1), std::abs(p2) + std::abs(p3), std::abs(p4) + std::abs(p5)};
+    const detail::FaceNormal normal = detail::face_normal(A, B, C);
+    const double* n = normal.n;
+    const double* perm = normal.permanent;
     const double na = n[f.a];
     const double na_bound = ORIENT2D_BOUND * perm[f.a];
     const double n_norm = std::abs(n[0]) + std::abs(n[1]) + std::abs(n[2]);

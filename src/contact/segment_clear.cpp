@@ -1,16 +1,14 @@
 #include <corocontact/contact/aabb_tree.hpp>
 
+#include "orientation.hpp"
+
 #include <cmath>
-#include <limits>
 
 namespace coro {
 
 namespace {
 
-// Rounding bound of a 3×3 determinant of rounded differences, relative to its permanent
-// (Shewchuk's static filter o3derrboundA ≈ 7ε/2, ε = 2⁻⁵³, with a safety factor; the same
-// bound as the axis-ray test's).
-constexpr double ORIENT3D_BOUND = 8.0 * std::numeric_limits<double>::epsilon();
+using detail::ORIENT3D_BOUND;
 
 struct SignedVolume {
     double value, bound; ///< the sign of value is exact when |value| > bound
@@ -39,13 +37,9 @@ bool negative(const SignedVolume& s) { return s.value < -s.bound; }
 bool segment_misses_triangle(const double* p, const double* q, const double* a, const double* b, const double* c)
 {
     // Plane side: n·(x − a), n = (b − a) × (c − a), for x = p and q, n's products shared.
-    const double ab[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
-    const double ac[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
-    const double m0 = ab[1] * ac[2], m1 = ab[2] * ac[1];
-    const double m2 = ab[2] * ac[0], m3 = ab[0] * ac[2];
-    const double m4 = ab[0] * ac[1], m5 = ab[1] * ac[0];
-    const double n[3] = {m0 - m1, m2 - m3, m4 - m5};
-    const double perm[3] = {std::abs(m0) + std::abs(m1), std::abs(m2) + std::abs(m3), std::abs(m4) + std::abs(m5)};
+    const detail::FaceNormal normal = detail::face_normal(a, b, c);
+    const double* n = normal.n;
+    const double* perm = normal.permanent;
     const auto side = [&](const double* x) {
         const double d[3] = {x[0] - a[0], x[1] - a[1], x[2] - a[2]};
         return SignedVolume{n[0] * d[0] + n[1] * d[1] + n[2] * d[2],
