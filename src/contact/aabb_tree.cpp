@@ -309,14 +309,42 @@ void AabbTree::refit(CRef<Positions> vertices)
         return;
     const double* data = vertices.data();
     const std::ptrdiff_t stride = vertices.outerStride();
-    // Large trees: the subtrees two levels down as tasks, then the few nodes above them.
+    // The box of each VERTEX_BLOCK consecutive vertices of m_vertex_order, blocks [first, last).
+    const auto vertex_blocks = [&](std::size_t first, std::size_t last) {
+        for (std::size_t b = first; b < last; ++b) {
+            double lo[3] = {std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity(),
+                            std::numeric_limits<double>::infinity()};
+            double hi[3] = {-lo[0], -lo[1], -lo[2]};
+            const std::size_t end = std::min(m_vertex_order.size(), (b + 1) * VERTEX_BLOCK);
+            for (std::size_t i = b * VERTEX_BLOCK; i < end; ++i) {
+                const double* x = data + stride * m_vertex_order[i];
+                for (int j = 0; j < 3; ++j) {
+                    lo[j] = std::min(lo[j], x[j]);
+                    hi[j] = std::max(hi[j], x[j]);
+                }
+            }
+            m_vertex_blocks[b].min = Vec3(lo[0], lo[1], lo[2]);
+            m_vertex_blocks[b].max = Vec3(hi[0], hi[1], hi[2]);
+        }
+    };
     constexpr Index PARALLEL_REFIT_FACES = 4096;
     if (num_faces() < PARALLEL_REFIT_FACES || m_task_roots.size() < 2) {
         refit_range(data, stride, 0, static_cast<Index>(m_nodes.size()));
+        vertex_blocks(0, m_vertex_blocks.size());
     } else {
-        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, m_task_roots.size(), 1),
+        // Large trees: one parallel pass over the subtrees two levels down and the vertex blocks
+        // (BLOCKS_PER_TASK to a task), then the few nodes above the subtrees.
+        constexpr std::size_t BLOCKS_PER_TASK = 32;
+        const std::size_t subtrees = m_task_roots.size();
+        const std::size_t block_tasks = (m_vertex_blocks.size() + BLOCKS_PER_TASK - 1) / BLOCKS_PER_TASK;
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, subtrees + block_tasks, 1),
                           [&](const tbb::blocked_range<std::size_t>& r) {
                               for (std::size_t i = r.begin(); i < r.end(); ++i) {
+                                  if (i >= subtrees) {
+                                      const std::size_t first = (i - subtrees) * BLOCKS_PER_TASK;
+                                      vertex_blocks(first, std::min(m_vertex_blocks.size(), first + BLOCKS_PER_TASK));
+                                      continue;
+                                  }
                                   const Index root = m_task_roots[i];
                                   refit_range(data, stride, root, m_subtree_end[static_cast<std::size_t>(root)]);
                               }
@@ -333,21 +361,6 @@ void AabbTree::refit(CRef<Positions> vertices)
         refit_node(data, stride, 0);
     }
     m_bounds = m_node_boxes[0];
-    for (std::size_t b = 0; b < m_vertex_blocks.size(); ++b) {
-        double lo[3] = {std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity(),
-                        std::numeric_limits<double>::infinity()};
-        double hi[3] = {-lo[0], -lo[1], -lo[2]};
-        const std::size_t end = std::min(m_vertex_order.size(), (b + 1) * VERTEX_BLOCK);
-        for (std::size_t i = b * VERTEX_BLOCK; i < end; ++i) {
-            const double* x = data + stride * m_vertex_order[i];
-            for (int j = 0; j < 3; ++j) {
-                lo[j] = std::min(lo[j], x[j]);
-                hi[j] = std::max(hi[j], x[j]);
-            }
-        }
-        m_vertex_blocks[b].min = Vec3(lo[0], lo[1], lo[2]);
-        m_vertex_blocks[b].max = Vec3(hi[0], hi[1], hi[2]);
-    }
 }
 
 void AabbTree::update_planes(CRef<Positions> vertices) const

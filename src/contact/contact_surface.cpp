@@ -3,6 +3,9 @@
 #include <corocontact/core/error.hpp>
 #include <corocontact/core/surface_mesh.hpp>
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
 #include <utility>
 
 namespace coro {
@@ -69,10 +72,18 @@ void ContactSurface::update(CRef<Positions> body_positions)
         tree.refit(vertices);
         return;
     }
-    for (std::size_t i = 0; i < body_node.size(); ++i) {
-        CORO_ASSERT(body_node[i] < body_positions.rows());
-        vertices.row(static_cast<Index>(i)) = body_positions.row(body_node[i]);
-    }
+    const auto copy = [&](std::size_t first, std::size_t last) {
+        for (std::size_t i = first; i < last; ++i) {
+            CORO_ASSERT(body_node[i] < body_positions.rows());
+            vertices.row(static_cast<Index>(i)) = body_positions.row(body_node[i]);
+        }
+    };
+    constexpr std::size_t PARALLEL_COPY_VERTICES = 2048;
+    if (body_node.size() < PARALLEL_COPY_VERTICES)
+        copy(0, body_node.size());
+    else
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, body_node.size(), PARALLEL_COPY_VERTICES / 2),
+                          [&](const tbb::blocked_range<std::size_t>& r) { copy(r.begin(), r.end()); });
     tree.refit(vertices);
 }
 
