@@ -201,13 +201,13 @@ int run_profile(Index resolution, const std::string& mode, bool depth, bool shar
                     : mode == "brute" ? DetectionMode::BRUTE_FORCE
                                       : DetectionMode::EXACT;
     settings.contact_data = depth;
-    settings.share_empty_cubes = share;
+    settings.share_answers = share;
     const Scene& s = scene(resolution);
     const ProfileTotals t = profile_frames(s, settings, frames);
     std::printf("profile: %s mode, %s, resolution %d (%d tets in 2 spheres), %d frames\n", mode.c_str(),
                 depth ? "with depth" : "inside only", resolution, s.tets, frames);
     std::printf("per frame: refit %.1f us, detection %.1f us, %.0f vertex queries, %.0f inside, %.0f by a "
-                "neighbour (empty cube or clear segment)\n",
+                "neighbour (clear-edge group)\n",
                 1e6 * t.refit_s / frames, 1e6 * t.detect_s / frames, t.queries / frames, t.inside / frames,
                 t.by_neighbour / frames);
     return 0;

@@ -371,7 +371,7 @@ void summary(Index resolution, int frames, std::size_t threads)
             }));
             DetectionSettings settings;
             settings.contact_data = p == EXACT || p == PAPER || p == EMBREE;
-            settings.share_empty_cubes = p != EXACT_EACH;
+            settings.share_answers = p != EXACT_EACH;
             settings.mode = p == PAPER || p == PAPER_INSIDE ? DetectionMode::PAPER
                             : p == BRUTE_INSIDE             ? DetectionMode::BRUTE_FORCE
                                                             : DetectionMode::EXACT;
@@ -437,7 +437,7 @@ void summary(Index resolution, int frames, std::size_t threads)
                 "phase, depth); update = Embree's per-frame refit (vertex upload + rtcCommitScene); detect = broad, "
                 "mid, narrow phase (+ nearest-point depth and normal unless 'inside only'), sorted output; "
                 "Mqueries/s = candidate vertices / detect time; shared = vertices that took a neighbour's "
-                "answer through an empty cube or a clear segment (DetectionSettings::share_empty_cubes; 'no sharing' "
+                "answer of another vertex of their group, joined by surface edges that meet no face of the other body (DetectionSettings::share_answers; 'no sharing' "
                 "tests each)\n");
     std::printf("ratio exact/Embree per frame, with depth:   %.3f  (refit+detect vs refit+update+detect)\n",
                 frame[EXACT] / frame[EMBREE]);

@@ -226,7 +226,7 @@ int detect_case(const DetectOptions& options)
     std::FILE* report = options.csv == "-" ? stderr : stdout;
     std::fprintf(report,
                  "%s: %zu bodies, %d overlapping pairs, %d vertex queries, %d inside, %d on a surface, "
-                 "%d winding-number fallbacks, %d answered by a neighbour (empty cube or clear segment), %s mode, %.3f ms\n",
+                 "%d winding-number fallbacks, %d answered by a neighbour (clear-edge group), %s mode, %.3f ms\n",
                  spec.simulation.name.c_str(), surfaces.size(), stats.pairs, stats.candidate_vertices, stats.inside,
                  stats.on_surface, stats.winding_fallbacks, stats.by_neighbour,
                  spec.contact.mode == coro::ContactMode::PAPER ? "paper" : "exact", 1e3 * seconds);

@@ -183,6 +183,9 @@ void AabbTree::build(CRef<Positions> vertices, const Tris& faces)
     m_planes.clear();
     m_planes_current = false;
     m_node_slots.clear();
+    m_slot_of_face.clear();
+    m_edge_start.clear();
+    m_edges.clear();
     m_bounds = Aabb{};
     if (faces.rows() == 0)
         return;
@@ -236,7 +239,44 @@ void AabbTree::build(CRef<Positions> vertices, const Tris& faces)
     for (std::size_t i = 0; i < m_order.size(); ++i)
         for (int c = 0; c < 3; ++c)
             m_slot_vertices[3 * i + static_cast<std::size_t>(c)] = faces(m_order[i], c);
+    m_slot_of_face.resize(m_order.size());
+    for (std::size_t i = 0; i < m_order.size(); ++i)
+        m_slot_of_face[static_cast<std::size_t>(m_order[i])] = static_cast<Index>(i);
+    build_edges(static_cast<std::size_t>(vertices.rows()));
     refit(vertices);
+}
+
+void AabbTree::build_edges(std::size_t vertex_count)
+{
+    // (low end, high end, slot) of every face side; sorted, the sides of one edge are adjacent.
+    std::vector<std::array<Index, 3>> sides;
+    sides.reserve(m_slot_vertices.size());
+    for (std::size_t slot = 0; slot < m_order.size(); ++slot)
+        for (std::size_t c = 0; c < 3; ++c) {
+            const Index a = m_slot_vertices[3 * slot + c], b = m_slot_vertices[3 * slot + (c + 1) % 3];
+            if (a != b) // a face with a repeated vertex has no edge there
+                sides.push_back({std::min(a, b), std::max(a, b), static_cast<Index>(slot)});
+        }
+    std::sort(sides.begin(), sides.end());
+    std::vector<std::array<Index, 4>> edges; // low end, high end, two of its faces' slots
+    for (std::size_t i = 0, j = 0; i < sides.size(); i = j) {
+        while (j < sides.size() && sides[j][0] == sides[i][0] && sides[j][1] == sides[i][1])
+            ++j;
+        edges.push_back({sides[i][0], sides[i][1], sides[i][2], sides[j - 1][2]});
+    }
+    m_edge_start.assign(vertex_count + 1, 0);
+    for (const auto& e : edges) {
+        ++m_edge_start[static_cast<std::size_t>(e[0]) + 1];
+        ++m_edge_start[static_cast<std::size_t>(e[1]) + 1];
+    }
+    for (std::size_t v = 0; v < vertex_count; ++v)
+        m_edge_start[v + 1] += m_edge_start[v];
+    m_edges.resize(2 * edges.size());
+    std::vector<Index> next(m_edge_start.begin(), m_edge_start.end() - 1);
+    for (const auto& e : edges) {
+        m_edges[static_cast<std::size_t>(next[static_cast<std::size_t>(e[0])]++)] = {e[1], {e[2], e[3]}};
+        m_edges[static_cast<std::size_t>(next[static_cast<std::size_t>(e[1])]++)] = {e[0], {e[2], e[3]}};
+    }
 }
 
 void AabbTree::refit_node(const double* data, std::ptrdiff_t stride, Index n)

@@ -2,6 +2,8 @@
 
 #include <corocontact/contact/broad_phase.hpp>
 
+#include "grouped_inside_tests.hpp"
+
 #include <tbb/blocked_range.h>
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
@@ -21,6 +23,15 @@ constexpr Index VERTEX_BLOCK = 256;
 /// make_contact_point with the hints of AabbTree::nearest (same answer, faster).
 ContactPoint contact_point(const std::vector<ContactSurface>& surfaces, Index body, Index vertex, Index other,
                            double distance_bound, Index hint_face);
+
+/// The positions of candidates first .. first + count − 1 of `pair`.
+void block_points(const std::vector<ContactSurface>& surfaces, const PairCandidates& pair, Index first, Index count,
+                  Vec3* points)
+{
+    const ContactSurface& body = surfaces[static_cast<std::size_t>(pair.body)];
+    for (Index i = 0; i < count; ++i)
+        points[i] = body.vertices.row(pair.vertices[static_cast<std::size_t>(first + i)]).transpose();
+}
 
 struct Block {
     std::size_t pair;
@@ -120,18 +131,14 @@ std::vector<ContactPoint> run_detection(const std::vector<ContactSurface>& surfa
                           for (std::size_t b = range.begin(); b < range.end(); ++b) {
                               const Block& block = blocks[b];
                               const PairCandidates& pair = candidates[block.pair];
-                              const ContactSurface& body = surfaces[static_cast<std::size_t>(pair.body)];
                               // The previous inside vertex's nearest face (vertices come in
                               // spatial order) seeds the next nearest-point search; reset per
                               // block, so the work does not depend on the scheduling (and the
                               // answers do not depend on the hints at all).
                               Index hint_face = -1;
-                              Vec3 block_points[VERTEX_BLOCK];
-                              InsideTest results[VERTEX_BLOCK];
-                              for (Index i = block.begin; i < block.end; ++i)
-                                  block_points[i - block.begin] =
-                                      body.vertices.row(pair.vertices[static_cast<std::size_t>(i)]).transpose();
-                              inside(pair, block_points, block.end - block.begin, results);
+                              InsideTest scratch[VERTEX_BLOCK];
+                              const InsideTest* results =
+                                  inside(block.pair, block.begin, block.end - block.begin, scratch);
                               for (Index i = block.begin; i < block.end; ++i) {
                                   const Index v = pair.vertices[static_cast<std::size_t>(i)];
                                   const InsideTest& result = results[i - block.begin];
@@ -260,14 +267,21 @@ std::vector<ContactPoint> detect_contacts(const std::vector<ContactSurface>& sur
                                           const DetectionSettings& settings, DetectionStats* stats)
 {
     const std::vector<PairCandidates> candidates = contact_candidates(surfaces, settings.mode);
+    const bool grouped = settings.share_answers && settings.mode == DetectionMode::EXACT;
+    std::vector<std::vector<InsideTest>> answers;
+    if (grouped)
+        answers = detail::grouped_inside_tests(surfaces, candidates, settings.tolerances);
     return run_detection(
         surfaces, candidates, count_pairs(candidates),
-        [&](const PairCandidates& pair, const Vec3* points, Index count, InsideTest* results) {
-            const ContactSurface& other = surfaces[static_cast<std::size_t>(pair.other)];
-            if (settings.share_empty_cubes)
-                inside_tests_shared(other, points, count, settings.mode, pair.faces, settings.tolerances, results);
-            else
-                inside_tests(other, points, count, settings.mode, pair.faces, settings.tolerances, results);
+        [&](std::size_t k, Index first, Index count, InsideTest* scratch) -> const InsideTest* {
+            if (grouped)
+                return answers[k].data() + first;
+            Vec3 points[VERTEX_BLOCK];
+            block_points(surfaces, candidates[k], first, count, points);
+            const PairCandidates& pair = candidates[k];
+            inside_tests(surfaces[static_cast<std::size_t>(pair.other)], points, count, settings.mode, pair.faces,
+                         settings.tolerances, scratch);
+            return scratch;
         },
         settings.contact_data, stats);
 }
@@ -279,9 +293,12 @@ std::vector<ContactPoint> detect_contacts(const std::vector<ContactSurface>& sur
     const std::vector<PairCandidates> candidates = contact_candidates(surfaces, DetectionMode::EXACT);
     return run_detection(
         surfaces, candidates, count_pairs(candidates),
-        [&](const PairCandidates& pair, const Vec3* points, Index count, InsideTest* results) {
+        [&](std::size_t k, Index first, Index count, InsideTest* scratch) -> const InsideTest* {
+            Vec3 points[VERTEX_BLOCK];
+            block_points(surfaces, candidates[k], first, count, points);
             for (Index i = 0; i < count; ++i)
-                results[i] = inside(pair.other, points[i]);
+                scratch[i] = inside(candidates[k].other, points[i]);
+            return scratch;
         },
         contact_data, stats);
 }

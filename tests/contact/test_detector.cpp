@@ -104,13 +104,13 @@ TEST(DetectContacts, OneAndTwoThreadsGiveIdenticalContacts)
     }
 }
 
-TEST(DetectContacts, SharedEmptyCubesChangeNothingButTheWork)
+TEST(DetectContacts, SharedAnswersChangeNothingButTheWork)
 {
-    // Deep overlap: most candidate vertices take a neighbour's answer (empty cubes, clear segments).
+    // Deep overlap: most candidate vertices take the answer of their clear-edge group's first.
     std::vector<ContactSurface> surfaces = pile_scene();
     surfaces.push_back(deformed_ball(Vec3(0.3, 0.1, 0.0), 0.9, 12, 0.06, "deep5"));
     DetectionSettings shared, each;
-    each.share_empty_cubes = false;
+    each.share_answers = false;
     DetectionStats s1, s2;
     const auto a = detect_contacts(surfaces, shared, &s1);
     const auto b = detect_contacts(surfaces, each, &s2);

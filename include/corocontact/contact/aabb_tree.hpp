@@ -11,6 +11,7 @@
 #endif
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <type_traits>
@@ -120,6 +121,35 @@ public:
     /// @param[in] vertices  the positions the tree was last built or refit with
     bool segment_clear(CRef<Positions> vertices, const Vec3& p, const Vec3& q) const;
 
+    /// Pairs (face of this tree, face of `other`) whose boxes overlap each other (closed) and
+    /// both meet `region`: a walk of the two trees together, four children against four (large
+    /// trees: this tree's top subtrees as parallel tasks). Every face of `other` that meets a
+    /// face of this surface inside `region` is in a pair with it.
+    /// @param[out] pairs  the pairs, each once, in an order that depends only on the two trees
+    void overlapping_faces(const AabbTree& other, const Aabb& region, std::vector<std::array<Index, 2>>& pairs) const;
+
+    /// Splits candidate vertices of this surface into groups joined by edges of this surface that
+    /// meet no face of `other`: the vertices of a group are all inside or all outside `other`'s
+    /// closed surface. An edge is clear when one of its faces is in no pair of `face_pairs`, or
+    /// when each face of `other` paired with it whose box meets the edge's is shown to miss the
+    /// edge by signs beyond their rounding (as segment_clear). A vertex on `other`'s surface
+    /// meets a face with every edge, so it is a group of its own.
+    /// @param[in] vertices        this surface's positions (last build or refit)
+    /// @param[in] other_vertices  `other`'s positions (last build or refit)
+    /// @param[in] face_pairs      overlapping_faces() of the two trees over a region holding
+    ///                            every candidate; (this face, other face) when `column` is 0,
+    ///                            (other face, this face) when it is 1
+    /// @param[in] candidates      distinct vertices of this surface in that region
+    /// @param[out] decider        per candidate, the index into `candidates` of its group's first
+    ///                            candidate (itself for that one)
+    /// @param[out] path           per candidate, an upper bound of the length of a path of clear
+    ///                            edges from its decider (0 for the decider), same unit as positions
+    /// @return the number of groups
+    Index clear_edge_groups(CRef<Positions> vertices, const AabbTree& other, CRef<Positions> other_vertices,
+                            const std::vector<std::array<Index, 2>>& face_pairs, int column,
+                            const std::vector<Index>& candidates, std::vector<Index>& decider,
+                            std::vector<double>& path) const;
+
     /// Nearest point of the surface to `point`.
     struct Nearest {
         Index face = -1;
@@ -179,6 +209,12 @@ private:
     static constexpr int MAX_DEPTH = 60;
     static constexpr int STACK_SIZE = 3 * MAX_DEPTH + 4;
     Index build_node(const std::vector<Vec3>& centroids, Index begin, Index end, int depth);
+    /// The lanes of `node` whose float box meets the float box [lo, hi] (one register per bound).
+    int lanes_meeting(Index node, const __m128* lo, const __m128* hi) const;
+    /// overlapping_faces() below node a_root of this tree and b_root of `other`, as slot pairs.
+    void walk_overlapping(const AabbTree& other, const Aabb& region, Index a_root, Index b_root,
+                          std::vector<std::array<Index, 2>>& slots) const;
+    void build_edges(std::size_t vertex_count);
     void refit_range(const double* data, std::ptrdiff_t stride, Index first, Index last);
     void refit_node(const double* data, std::ptrdiff_t stride, Index n);
     /// The planes of a node's children: unit normal u, offset and slack s such that every point
@@ -198,6 +234,7 @@ private:
     std::vector<Index> m_node_slots;  // 2 per node: the range of slots (faces) of its subtree
     std::vector<Index> m_task_roots;  // parallel refit: roots of the subtrees refit as tasks
     std::vector<Index> m_order;       // face of each slot, in leaf order
+    std::vector<Index> m_slot_of_face; // inverse of m_order
     mutable std::vector<FacePlanes> m_planes; // per node; a cache filled by update_planes
     mutable bool m_planes_current = false;    // m_planes match the positions of the last refit
     std::vector<Aabb> m_face_boxes;   // exact box of the face in each slot, refit with the nodes
@@ -205,6 +242,14 @@ private:
     Aabb m_bounds;
     std::vector<Index> m_vertex_order;  // used vertices, first appearance in leaf order
     std::vector<Aabb> m_vertex_blocks;  // box of each VERTEX_BLOCK consecutive m_vertex_order entries
+    /// One edge seen from a vertex: the other end and the slots of two faces holding the edge
+    /// (the same slot twice on a boundary edge).
+    struct VertexEdge {
+        Index vertex;
+        Index slot[2];
+    };
+    std::vector<Index> m_edge_start;   // #V + 1: the edges of vertex v are m_edges[start[v], start[v + 1])
+    std::vector<VertexEdge> m_edges;   // each edge twice, once from either end
     Tris m_faces;
 };
 

@@ -68,9 +68,9 @@ AxisOutcome axis_test(const ContactSurface& surface, const Vec3& point, int axis
 /// exact mode).
 struct InsideTest {
     bool inside = false;
-    /// 0..2, or 3 for the winding-number fallback, −1: no axis hit; DECIDED_BY_NEIGHBOUR
-    /// (inside_tests_shared() only): the answer of a neighbour joined to the point by a segment
-    /// that meets no face (an empty cube, or AabbTree::segment_clear)
+    /// 0..2, or 3 for the winding-number fallback, −1: no axis hit; DECIDED_BY_NEIGHBOUR: the
+    /// answer of another point joined to it by segments that meet no face (inside_tests_shared():
+    /// an empty cube or AabbTree::segment_clear; the detector: AabbTree::clear_edge_groups)
     int deciding_axis = -1;
     bool on_surface = false;       ///< exact modes: the point lies on the surface (then not inside)
     /// Exact modes, decided by an axis: the distance along that axis to the closest clean face
@@ -81,7 +81,8 @@ struct InsideTest {
     Index crossing_face = -1;
 };
 
-/// InsideTest::deciding_axis of a point that took a neighbour's answer (inside_tests_shared()).
+/// InsideTest::deciding_axis of a point that took a neighbour's answer (inside_tests_shared(),
+/// the detector's clear-edge groups).
 constexpr int DECIDED_BY_NEIGHBOUR = 4;
 
 /// Paper mode: axes x, y, z until one has a hit (INSIDE or OUTSIDE); no hit on all three ⇒

@@ -28,9 +28,9 @@ struct DetectionStats {
     Index inside = 0;
     Index winding_fallbacks = 0; ///< exact mode: vertices undecided on all three axes
     Index on_surface = 0;        ///< exact mode: vertices lying on the other surface (not inside)
-    Index by_neighbour = 0;      ///< exact mode: vertices that took a neighbour's answer through an
-                                 ///< empty cube or a clear segment (inside_tests_shared), no test of
-                                 ///< their own
+    Index by_neighbour = 0;      ///< exact mode: vertices that took the answer of another vertex
+                                 ///< of their clear-edge group (DetectionSettings::share_answers),
+                                 ///< no test of their own
 };
 
 struct DetectionSettings {
@@ -40,12 +40,13 @@ struct DetectionSettings {
     /// query each). When false those fields keep their defaults (depth 0, face −1): enough for
     /// inside/outside counts and cross-checks.
     bool contact_data = true;
-    /// Exact mode: neighbouring candidate vertices share work (inside_tests_shared): a vertex
-    /// joined to a neighbour by a segment that meets no face of the other surface (an empty cube
-    /// around one of them, or AabbTree::segment_clear) takes its answer, the same as its own test
-    /// would give.
+    /// Exact mode: candidate vertices share answers. The candidates of a pair are grouped by
+    /// edges of their surface that meet no face of the other surface (AabbTree::
+    /// clear_edge_groups over the face pairs of AabbTree::overlapping_faces); the first vertex
+    /// of each group is tested and the others take its answer, the same as their own tests
+    /// would give. Where the other surface is not closed, every candidate is tested.
     /// False: every candidate vertex is tested (for measurements and cross-checks).
-    bool share_empty_cubes = true;
+    bool share_answers = true;
 };
 
 /// Detects every surface vertex of every body that lies inside another body, for all

@@ -1,0 +1,145 @@
+#include <corocontact/contact/aabb_tree.hpp>
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+namespace coro {
+
+namespace {
+
+using Pairs = std::vector<std::array<Index, 2>>;
+
+bool boxes_meet(const Aabb& a, const Aabb& b)
+{
+    return a.min[0] <= b.max[0] && b.min[0] <= a.max[0] && a.min[1] <= b.max[1] && b.min[1] <= a.max[1] &&
+           a.min[2] <= b.max[2] && b.min[2] <= a.max[2];
+}
+
+/// A float box, one coordinate bound broadcast to each register.
+struct WideBox {
+    __m128 lo[3], hi[3];
+};
+
+WideBox wide_box(const Aabb& box)
+{
+    WideBox w;
+    for (int j = 0; j < 3; ++j) {
+        w.lo[j] = _mm_set1_ps(detail::float_down(box.min[j]));
+        w.hi[j] = _mm_set1_ps(detail::float_up(box.max[j]));
+    }
+    return w;
+}
+
+} // namespace
+
+/// The lanes of node `node` whose float box meets `box` (closed).
+int AabbTree::lanes_meeting(Index node, const __m128* lo, const __m128* hi) const
+{
+    const WideNode& w = m_nodes[static_cast<std::size_t>(node)];
+    __m128 overlap = _mm_and_ps(_mm_cmple_ps(_mm_load_ps(w.lo[0]), hi[0]), _mm_cmpge_ps(_mm_load_ps(w.hi[0]), lo[0]));
+    for (int j = 1; j < 3; ++j)
+        overlap = _mm_and_ps(overlap, _mm_and_ps(_mm_cmple_ps(_mm_load_ps(w.lo[j]), hi[j]),
+                                                 _mm_cmpge_ps(_mm_load_ps(w.hi[j]), lo[j])));
+    return _mm_movemask_ps(overlap) & ((1 << w.count) - 1);
+}
+
+void AabbTree::overlapping_faces(const AabbTree& other, const Aabb& region, Pairs& pairs) const
+{
+    pairs.clear();
+    if (m_nodes.empty() || other.m_nodes.empty() || region.empty() || !boxes_meet(m_bounds, region) ||
+        !boxes_meet(other.m_bounds, region) || !boxes_meet(m_bounds, other.m_bounds))
+        return;
+    // Large trees: the subtrees below this tree's top two levels (when they hold every face) as
+    // tasks against the whole of `other`, their pairs joined in task order.
+    Index under_task_roots = 0;
+    for (const Index root : m_task_roots)
+        under_task_roots += m_node_slots[2 * static_cast<std::size_t>(root) + 1] - m_node_slots[2 * static_cast<std::size_t>(root)];
+    if (num_faces() < 4096 || m_task_roots.size() < 2 || under_task_roots != num_faces()) {
+        walk_overlapping(other, region, 0, 0, pairs);
+    } else {
+        std::vector<Pairs> parts(m_task_roots.size());
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, parts.size(), 1),
+                          [&](const tbb::blocked_range<std::size_t>& r) {
+                              for (std::size_t t = r.begin(); t < r.end(); ++t)
+                                  walk_overlapping(other, region, m_task_roots[t], 0, parts[t]);
+                          });
+        for (const Pairs& part : parts)
+            pairs.insert(pairs.end(), part.begin(), part.end());
+    }
+    for (auto& pair : pairs) {
+        pair[0] = m_order[static_cast<std::size_t>(pair[0])];
+        pair[1] = other.m_order[static_cast<std::size_t>(pair[1])];
+    }
+}
+
+void AabbTree::walk_overlapping(const AabbTree& other, const Aabb& region, Index a_root, Index b_root,
+                                Pairs& slots) const
+{
+    // Float boxes bound the exact ones and the region is widened to floats, so a lane is dropped
+    // only when its exact box misses; face pairs are then checked on their exact boxes.
+    const WideBox wide_region = wide_box(region);
+    const auto emit = [&](Index slot_a, Index slot_b) {
+        const Aabb& box_a = m_face_boxes[static_cast<std::size_t>(slot_a)];
+        const Aabb& box_b = other.m_face_boxes[static_cast<std::size_t>(slot_b)];
+        if (boxes_meet(box_a, box_b) && boxes_meet(box_a, region) && boxes_meet(box_b, region))
+            slots.push_back({slot_a, slot_b});
+    };
+    // One face against a subtree of the other tree.
+    Index face_stack[STACK_SIZE];
+    const auto face_against = [&](const AabbTree& tree, Index root, const Aabb& face_box, auto&& emit_slot) {
+        if (!boxes_meet(face_box, region))
+            return;
+        const WideBox box = wide_box(face_box);
+        int top = 0;
+        face_stack[top++] = root;
+        while (top > 0) {
+            const Index node = face_stack[--top];
+            const WideNode& w = tree.m_nodes[static_cast<std::size_t>(node)];
+            for (int m = tree.lanes_meeting(node, box.lo, box.hi); m != 0; m &= m - 1) {
+                const int k = __builtin_ctz(static_cast<unsigned>(m));
+                if ((w.face_mask >> k) & 1)
+                    emit_slot(-1 - w.child[k]);
+                else
+                    face_stack[top++] = w.child[k];
+            }
+        }
+    };
+    std::vector<std::array<Index, 2>> stack{{a_root, b_root}};
+    while (!stack.empty()) {
+        const auto [na, nb] = stack.back();
+        stack.pop_back();
+        const WideNode& a = m_nodes[static_cast<std::size_t>(na)];
+        const WideNode& b = other.m_nodes[static_cast<std::size_t>(nb)];
+        const int mask_b = other.lanes_meeting(nb, wide_region.lo, wide_region.hi);
+        if (mask_b == 0)
+            continue;
+        for (int ma = lanes_meeting(na, wide_region.lo, wide_region.hi); ma != 0; ma &= ma - 1) {
+            const int i = __builtin_ctz(static_cast<unsigned>(ma));
+            __m128 lo[3], hi[3];
+            for (int j = 0; j < 3; ++j) {
+                lo[j] = _mm_set1_ps(a.lo[j][i]);
+                hi[j] = _mm_set1_ps(a.hi[j][i]);
+            }
+            const bool face_a = (a.face_mask >> i) & 1;
+            for (int mb = other.lanes_meeting(nb, lo, hi) & mask_b; mb != 0; mb &= mb - 1) {
+                const int k = __builtin_ctz(static_cast<unsigned>(mb));
+                const bool face_b = (b.face_mask >> k) & 1;
+                if (!face_a && !face_b) {
+                    stack.push_back({a.child[i], b.child[k]});
+                } else if (face_a && face_b) {
+                    emit(-1 - a.child[i], -1 - b.child[k]);
+                } else if (face_a) {
+                    const Index slot_a = -1 - a.child[i];
+                    face_against(other, b.child[k], m_face_boxes[static_cast<std::size_t>(slot_a)],
+                                 [&](Index slot_b) { emit(slot_a, slot_b); });
+                } else {
+                    const Index slot_b = -1 - b.child[k];
+                    face_against(*this, a.child[i], other.m_face_boxes[static_cast<std::size_t>(slot_b)],
+                                 [&](Index slot_a) { emit(slot_a, slot_b); });
+                }
+            }
+        }
+    }
+}
+
+} // namespace coro
