@@ -9,11 +9,12 @@ namespace coro {
 Index AabbTree::clear_edge_groups(CRef<Positions> vertices, const AabbTree& other, CRef<Positions> other_vertices,
                                   const std::vector<std::array<Index, 2>>& face_pairs, int column,
                                   const std::vector<Index>& candidates, std::vector<Index>& decider,
-                                  std::vector<double>& path) const
+                                  std::vector<double>* path) const
 {
     const std::size_t n = candidates.size();
     decider.assign(n, -1);
-    path.assign(n, 0.0);
+    if (path)
+        path->assign(n, 0.0);
 
     // The faces of `other` paired with each face of this surface, by slot (of both trees).
     const auto mine = static_cast<std::size_t>(column), theirs = 1 - mine;
@@ -87,13 +88,16 @@ Index AabbTree::clear_edge_groups(CRef<Positions> vertices, const AabbTree& othe
                 if (b < 0 || decider[static_cast<std::size_t>(b)] >= 0 || !edge_clear(u, e))
                     continue;
                 decider[static_cast<std::size_t>(b)] = static_cast<Index>(i);
+                queue.push_back(b);
+                if (!path)
+                    continue;
                 // The sum rounded up by a relative 2⁻⁴⁰, far above the rounding of its terms.
                 const double* x = data + stride * u;
                 const double* y = data + stride * e.vertex;
                 const double length =
                     std::sqrt((x[0] - y[0]) * (x[0] - y[0]) + (x[1] - y[1]) * (x[1] - y[1]) + (x[2] - y[2]) * (x[2] - y[2]));
-                path[static_cast<std::size_t>(b)] = (path[static_cast<std::size_t>(a)] + length) * (1.0 + 0x1p-40);
-                queue.push_back(b);
+                std::vector<double>& p = *path;
+                p[static_cast<std::size_t>(b)] = (p[static_cast<std::size_t>(a)] + length) * (1.0 + 0x1p-40);
             }
         }
     }

@@ -38,10 +38,11 @@ struct Block {
     Index begin, end;
 };
 
-/// The points of `slots` flagged in `inside`, sorted by (body, vertex, other). `candidates` is
+/// The points of the slots flagged in `inside`, sorted by (body, vertex, other). `candidates` is
 /// ordered by (body, other) and slot offsets[k] + i belongs to its pair k's candidate i, so a
 /// stable counting sort by vertex over each body's pairs gives that order in O(points + vertices);
-/// a body with few points against many vertices sorts keys instead.
+/// a body with few points against many vertices sorts keys instead. `slots` holds each inside
+/// slot's point with its depth and normal; empty: the points carry body, vertex and other only.
 std::vector<ContactPoint> sorted_points(const std::vector<ContactSurface>& surfaces,
                                         const std::vector<PairCandidates>& candidates,
                                         const std::vector<std::size_t>& offsets, const std::vector<ContactPoint>& slots,
@@ -59,32 +60,48 @@ std::vector<ContactPoint> sorted_points(const std::vector<ContactSurface>& surfa
         for (; last < candidates.size() && candidates[last].body == body; ++last)
             for (std::size_t i = offsets[last]; i < offsets[last + 1]; ++i)
                 count += inside[i];
+        // Slot i of this body's pairs: its pair, found among few.
+        const auto emit = [&](std::size_t i) {
+            if (!slots.empty()) {
+                points.push_back(slots[i]);
+                return;
+            }
+            const auto k = static_cast<std::size_t>(
+                std::upper_bound(offsets.begin() + static_cast<std::ptrdiff_t>(first),
+                                 offsets.begin() + static_cast<std::ptrdiff_t>(last), i) -
+                offsets.begin() - 1);
+            ContactPoint& c = points.emplace_back();
+            c.body = body;
+            c.vertex = candidates[k].vertices[i - offsets[k]];
+            c.other = candidates[k].other;
+        };
+        const auto vertex_of = [&](std::size_t k, std::size_t i) { return candidates[k].vertices[i - offsets[k]]; };
         const auto vertices = static_cast<std::size_t>(surfaces[static_cast<std::size_t>(body)].vertices.rows());
         if (8 * count >= vertices) {
             start.assign(vertices + 1, 0);
             for (std::size_t k = first; k < last; ++k)
                 for (std::size_t i = offsets[k]; i < offsets[k + 1]; ++i)
-                    start[static_cast<std::size_t>(slots[i].vertex) + 1] += inside[i];
+                    start[static_cast<std::size_t>(vertex_of(k, i)) + 1] += inside[i];
             for (std::size_t v = 0; v < vertices; ++v)
                 start[v + 1] += start[v];
             order.resize(count);
             for (std::size_t k = first; k < last; ++k) // others ascending: stable within a vertex
                 for (std::size_t i = offsets[k]; i < offsets[k + 1]; ++i)
                     if (inside[i])
-                        order[static_cast<std::size_t>(start[static_cast<std::size_t>(slots[i].vertex)]++)] = i;
+                        order[static_cast<std::size_t>(start[static_cast<std::size_t>(vertex_of(k, i))]++)] = i;
             for (const std::size_t i : order)
-                points.push_back(slots[i]);
+                emit(i);
         } else {
             keys.clear();
             for (std::size_t k = first; k < last; ++k)
                 for (std::size_t i = offsets[k]; i < offsets[k + 1]; ++i)
                     if (inside[i])
-                        keys.emplace_back((static_cast<std::uint64_t>(slots[i].vertex) << 32) |
-                                              static_cast<std::uint32_t>(slots[i].other),
+                        keys.emplace_back((static_cast<std::uint64_t>(vertex_of(k, i)) << 32) |
+                                              static_cast<std::uint32_t>(candidates[k].other),
                                           i);
             std::sort(keys.begin(), keys.end());
             for (const auto& key : keys)
-                points.push_back(slots[key.second]);
+                emit(key.second);
         }
         first = last;
     }
@@ -122,7 +139,9 @@ std::vector<ContactPoint> run_detection(const std::vector<ContactSurface>& surfa
                           });
     }
 
-    std::vector<ContactPoint> slots(offsets.back());
+    // Points with depth and normal are made in the parallel loop; without, the sorted output
+    // makes them from the candidates.
+    std::vector<ContactPoint> slots(contact_data ? offsets.back() : 0);
     std::vector<unsigned char> is_inside(offsets.back(), 0);
     tbb::enumerable_thread_specific<DetectionStats> local_stats;
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, blocks.size(), 1),
@@ -151,15 +170,11 @@ std::vector<ContactPoint> run_detection(const std::vector<ContactSurface>& surfa
                                   ++counts.inside;
                                   const std::size_t slot = offsets[block.pair] + static_cast<std::size_t>(i);
                                   is_inside[slot] = 1;
-                                  ContactPoint& c = slots[slot];
                                   if (contact_data) {
+                                      ContactPoint& c = slots[slot];
                                       c = contact_point(surfaces, pair.body, v, pair.other,
                                                         result.surface_distance_bound, hint_face);
                                       hint_face = c.face;
-                                  } else {
-                                      c.body = pair.body;
-                                      c.vertex = v;
-                                      c.other = pair.other;
                                   }
                               }
                           }
@@ -270,7 +285,7 @@ std::vector<ContactPoint> detect_contacts(const std::vector<ContactSurface>& sur
     const bool grouped = settings.share_answers && settings.mode == DetectionMode::EXACT;
     std::vector<std::vector<InsideTest>> answers;
     if (grouped)
-        answers = detail::grouped_inside_tests(surfaces, candidates, settings.tolerances);
+        answers = detail::grouped_inside_tests(surfaces, candidates, settings.tolerances, settings.contact_data);
     return run_detection(
         surfaces, candidates, count_pairs(candidates),
         [&](std::size_t k, Index first, Index count, InsideTest* scratch) -> const InsideTest* {

@@ -24,7 +24,8 @@ struct TestBlock {
 
 std::vector<std::vector<InsideTest>> grouped_inside_tests(const std::vector<ContactSurface>& surfaces,
                                                           const std::vector<PairCandidates>& candidates,
-                                                          const AxisRayTolerances& tolerances)
+                                                          const AxisRayTolerances& tolerances,
+                                                          bool distance_bounds)
 {
     const std::size_t pairs = candidates.size();
     std::vector<std::vector<Index>> decider(pairs);
@@ -66,12 +67,14 @@ std::vector<std::vector<InsideTest>> grouped_inside_tests(const std::vector<Cont
             const std::size_t n = pair.vertices.size();
             if (other.closed) {
                 body.tree.clear_edge_groups(body.vertices, other.tree, other.vertices, face_pairs[lower[k]],
-                                            lower[k] == k ? 0 : 1, pair.vertices, decider[k], path[k]);
+                                            lower[k] == k ? 0 : 1, pair.vertices, decider[k],
+                                            distance_bounds ? &path[k] : nullptr);
             } else {
                 decider[k].resize(n);
                 for (std::size_t i = 0; i < n; ++i)
                     decider[k][i] = static_cast<Index>(i);
-                path[k].assign(n, 0.0);
+                if (distance_bounds)
+                    path[k].assign(n, 0.0);
             }
             for (std::size_t i = 0; i < n; ++i)
                 if (decider[k][i] == static_cast<Index>(i))
@@ -120,7 +123,8 @@ std::vector<std::vector<InsideTest>> grouped_inside_tests(const std::vector<Cont
                 to.crossing_face = from.crossing_face;
                 // Some point of the surface lies within the decider's bound of it; the sum is
                 // rounded up by a relative 10⁻¹² (far above the rounding of the two terms).
-                to.surface_distance_bound = (from.surface_distance_bound + path[k][i]) * (1.0 + 1e-12);
+                if (distance_bounds)
+                    to.surface_distance_bound = (from.surface_distance_bound + path[k][i]) * (1.0 + 1e-12);
             }
     });
     return answers;

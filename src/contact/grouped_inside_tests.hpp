@@ -13,11 +13,12 @@ namespace coro::detail {
 /// Where the other surface is closed, the candidates of a pair are grouped by
 /// AabbTree::clear_edge_groups and only the first of each group is tested (inside_tests()); the
 /// others take its answer with deciding_axis DECIDED_BY_NEIGHBOUR, on_surface false, its
-/// crossing_face and, as surface_distance_bound, its bound plus their path. Else every
-/// candidate is tested. Pairs, and blocks of the tested vertices, are TBB tasks; the answers do
+/// crossing_face and, as surface_distance_bound, its bound plus their path (+∞ without
+/// `distance_bounds`: no path lengths are summed). Else every candidate is tested. Pairs, and blocks of the tested vertices, are TBB tasks; the answers do
 /// not depend on the scheduling.
 std::vector<std::vector<InsideTest>> grouped_inside_tests(const std::vector<ContactSurface>& surfaces,
                                                           const std::vector<PairCandidates>& candidates,
-                                                          const AxisRayTolerances& tolerances);
+                                                          const AxisRayTolerances& tolerances,
+                                                          bool distance_bounds);
 
 } // namespace coro::detail

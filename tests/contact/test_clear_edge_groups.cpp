@@ -73,7 +73,7 @@ Index expect_groups_agree_with_winding_numbers(const ContactSurface& a, const Co
     a.tree.overlapping_faces(b.tree, region, pairs);
     std::vector<Index> decider;
     std::vector<double> path;
-    const Index groups = a.tree.clear_edge_groups(a.vertices, b.tree, b.vertices, pairs, 0, candidates, decider, path);
+    const Index groups = a.tree.clear_edge_groups(a.vertices, b.tree, b.vertices, pairs, 0, candidates, decider, &path);
     EXPECT_EQ(decider.size(), candidates.size());
     EXPECT_EQ(path.size(), candidates.size());
     Index firsts = 0;
@@ -175,7 +175,7 @@ TEST(ClearEdgeGroups, VerticesOnTheOtherSurfaceStandAlone)
     a.tree.overlapping_faces(b.tree, region, pairs);
     std::vector<Index> decider;
     std::vector<double> path;
-    a.tree.clear_edge_groups(a.vertices, b.tree, b.vertices, pairs, 0, candidates, decider, path);
+    a.tree.clear_edge_groups(a.vertices, b.tree, b.vertices, pairs, 0, candidates, decider, &path);
     int on_surface = 0;
     for (std::size_t i = 0; i < candidates.size(); ++i) {
         const Vec3 p = a.vertices.row(candidates[i]).transpose();
@@ -194,11 +194,11 @@ TEST(ClearEdgeGroups, VerticesOnTheOtherSurfaceStandAlone)
         std::swap(pair[0], pair[1]);
     std::vector<Index> b_candidates, b_decider;
     b.tree.vertices_in_box(b.vertices, region, b_candidates);
-    b.tree.clear_edge_groups(b.vertices, a.tree, a.vertices, pairs, 1, b_candidates, b_decider, path);
+    b.tree.clear_edge_groups(b.vertices, a.tree, a.vertices, pairs, 1, b_candidates, b_decider, &path);
     for (std::size_t i = 0; i < b_candidates.size(); ++i)
         EXPECT_EQ(b_decider[i], static_cast<Index>(i)); // all of B's candidates lie on A's +x face
     std::vector<Index> again;
-    b.tree.clear_edge_groups(b.vertices, a.tree, a.vertices, reversed, 0, b_candidates, again, path);
+    b.tree.clear_edge_groups(b.vertices, a.tree, a.vertices, reversed, 0, b_candidates, again, &path);
     EXPECT_EQ(again, b_decider);
 }
 

@@ -143,12 +143,13 @@ public:
     /// @param[out] decider        per candidate, the index into `candidates` of its group's first
     ///                            candidate (itself for that one)
     /// @param[out] path           per candidate, an upper bound of the length of a path of clear
-    ///                            edges from its decider (0 for the decider), same unit as positions
+    ///                            edges from its decider (0 for the decider), same unit as
+    ///                            positions; null: not computed
     /// @return the number of groups
     Index clear_edge_groups(CRef<Positions> vertices, const AabbTree& other, CRef<Positions> other_vertices,
                             const std::vector<std::array<Index, 2>>& face_pairs, int column,
                             const std::vector<Index>& candidates, std::vector<Index>& decider,
-                            std::vector<double>& path) const;
+                            std::vector<double>* path) const;
 
     /// Nearest point of the surface to `point`.
     struct Nearest {
