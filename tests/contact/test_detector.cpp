@@ -69,6 +69,10 @@ TEST(DetectContacts, ExactEqualsBruteForceOnEveryVertexOfAPile)
     EXPECT_EQ(keys(points), expected);
     EXPECT_GT(expected.size(), 100u);
     EXPECT_EQ(stats.inside, static_cast<Index>(points.size()));
+    // Without depth and normal the points are made from the candidates, not from slots.
+    DetectionSettings inside_only;
+    inside_only.contact_data = false;
+    EXPECT_EQ(keys(detect_contacts(surfaces, inside_only)), expected);
     Index pairs = 0;
     for (std::size_t a = 0; a < surfaces.size(); ++a)
         for (std::size_t b = a + 1; b < surfaces.size(); ++b)
