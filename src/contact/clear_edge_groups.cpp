@@ -6,52 +6,68 @@
 
 namespace coro {
 
+namespace {
+
+// Vertex states during the search: not a candidate, or a candidate not yet in a group; a
+// grouped candidate holds its decider's index (≥ 0).
+constexpr Index NOT_CANDIDATE = -2;
+constexpr Index UNGROUPED = -1;
+
+} // namespace
+
 Index AabbTree::clear_edge_groups(CRef<Positions> vertices, const AabbTree& other, CRef<Positions> other_vertices,
                                   const std::vector<std::array<Index, 2>>& face_pairs, int column,
                                   const std::vector<Index>& candidates, std::vector<Index>& decider,
                                   std::vector<double>* path) const
 {
     const std::size_t n = candidates.size();
-    decider.assign(n, -1);
-    if (path)
-        path->assign(n, 0.0);
 
-    // The faces of `other` paired with each face of this surface, by slot (of both trees).
+    // The faces of `other` paired with each paired face of this surface (slots of both trees):
+    // paired slots get dense ids, the partners of id j are partners[start[j], start[j + 1]).
     const auto mine = static_cast<std::size_t>(column), theirs = 1 - mine;
-    std::vector<Index> partner_start(m_order.size() + 1, 0);
-    for (const auto& pair : face_pairs)
-        ++partner_start[static_cast<std::size_t>(m_slot_of_face[static_cast<std::size_t>(pair[mine])]) + 1];
-    for (std::size_t s = 0; s < m_order.size(); ++s)
-        partner_start[s + 1] += partner_start[s];
+    std::vector<Index> paired_id(m_order.size(), -1);
+    std::vector<Index> start(1, 0);
+    start.reserve(face_pairs.size() + 1);
+    for (const auto& pair : face_pairs) {
+        Index& id = paired_id[static_cast<std::size_t>(m_slot_of_face[static_cast<std::size_t>(pair[mine])])];
+        if (id < 0) {
+            id = static_cast<Index>(start.size() - 1);
+            start.push_back(0);
+        }
+        ++start[static_cast<std::size_t>(id) + 1];
+    }
+    for (std::size_t j = 1; j < start.size(); ++j)
+        start[j] += start[j - 1];
     std::vector<Index> partners(face_pairs.size());
     {
-        std::vector<Index> next(partner_start.begin(), partner_start.end() - 1);
-        for (const auto& pair : face_pairs)
-            partners[static_cast<std::size_t>(next[static_cast<std::size_t>(
-                m_slot_of_face[static_cast<std::size_t>(pair[mine])])]++)] =
+        std::vector<Index> next(start.begin(), start.end() - 1);
+        for (const auto& pair : face_pairs) {
+            const Index id = paired_id[static_cast<std::size_t>(m_slot_of_face[static_cast<std::size_t>(pair[mine])])];
+            partners[static_cast<std::size_t>(next[static_cast<std::size_t>(id)]++)] =
                 other.m_slot_of_face[static_cast<std::size_t>(pair[theirs])];
+        }
     }
-    const auto partner_count = [&](Index slot) {
-        return partner_start[static_cast<std::size_t>(slot) + 1] - partner_start[static_cast<std::size_t>(slot)];
-    };
 
     const double* data = vertices.data();
     const std::ptrdiff_t stride = vertices.outerStride();
     const double* other_data = other_vertices.data();
     const std::ptrdiff_t other_stride = other_vertices.outerStride();
     // A face of `other` that meets the edge meets the box of each face holding it: test the
-    // partners of the face with fewer (none: the edge is clear).
+    // partners of the face with fewer (a face with none: the edge is clear).
     const auto edge_clear = [&](Index u, const VertexEdge& e) {
-        const Index slot = partner_count(e.slot[0]) <= partner_count(e.slot[1]) ? e.slot[0] : e.slot[1];
-        const Index first = partner_start[static_cast<std::size_t>(slot)];
-        const Index last = partner_start[static_cast<std::size_t>(slot) + 1];
-        if (first == last)
+        const Index id0 = paired_id[static_cast<std::size_t>(e.slot[0])];
+        const Index id1 = paired_id[static_cast<std::size_t>(e.slot[1])];
+        if (id0 < 0 || id1 < 0)
             return true;
+        const auto count = [&](Index id) {
+            return start[static_cast<std::size_t>(id) + 1] - start[static_cast<std::size_t>(id)];
+        };
+        const Index id = count(id0) <= count(id1) ? id0 : id1;
         const double* p = data + stride * u;
         const double* q = data + stride * e.vertex;
         const double lo[3] = {std::min(p[0], q[0]), std::min(p[1], q[1]), std::min(p[2], q[2])};
         const double hi[3] = {std::max(p[0], q[0]), std::max(p[1], q[1]), std::max(p[2], q[2])};
-        for (Index k = first; k < last; ++k) {
+        for (Index k = start[static_cast<std::size_t>(id)]; k < start[static_cast<std::size_t>(id) + 1]; ++k) {
             const std::size_t g = static_cast<std::size_t>(partners[static_cast<std::size_t>(k)]);
             const Aabb& fb = other.m_face_boxes[g];
             if (fb.min[0] > hi[0] || fb.min[1] > hi[1] || fb.min[2] > hi[2] || fb.max[0] < lo[0] ||
@@ -65,30 +81,37 @@ Index AabbTree::clear_edge_groups(CRef<Positions> vertices, const AabbTree& othe
         return true;
     };
 
-    // Breadth-first from each candidate not yet grouped, in the order given.
-    std::vector<Index> local(m_edge_start.empty() ? 0 : m_edge_start.size() - 1, -1);
-    for (std::size_t i = 0; i < n; ++i)
-        local[static_cast<std::size_t>(candidates[i])] = static_cast<Index>(i);
-    std::vector<Index> queue;
-    queue.reserve(n);
+    // Breadth-first from each candidate not yet grouped, in the order given; the search works on
+    // vertex numbers, one state per vertex of this surface.
+    std::vector<Index> state(m_edge_start.empty() ? 0 : m_edge_start.size() - 1, NOT_CANDIDATE);
+    for (const Index v : candidates)
+        state[static_cast<std::size_t>(v)] = UNGROUPED;
+    std::vector<double> length_to; // by vertex, when a path is wanted
+    if (path)
+        length_to.resize(state.size());
+    std::vector<Index> queue(n);
     Index groups = 0;
     for (std::size_t i = 0; i < n; ++i) {
-        if (decider[i] >= 0)
+        const Index first = candidates[i];
+        if (state[static_cast<std::size_t>(first)] != UNGROUPED)
             continue;
         ++groups;
-        decider[i] = static_cast<Index>(i);
-        queue.assign(1, static_cast<Index>(i));
-        for (std::size_t head = 0; head < queue.size(); ++head) {
-            const Index a = queue[head];
-            const Index u = candidates[static_cast<std::size_t>(a)];
-            for (Index k = m_edge_start[static_cast<std::size_t>(u)]; k < m_edge_start[static_cast<std::size_t>(u) + 1];
-                 ++k) {
+        const auto group = static_cast<Index>(i);
+        state[static_cast<std::size_t>(first)] = group;
+        if (path)
+            length_to[static_cast<std::size_t>(first)] = 0.0;
+        std::size_t head = 0, tail = 0;
+        queue[tail++] = first;
+        while (head < tail) {
+            const Index u = queue[head++];
+            const Index end = m_edge_start[static_cast<std::size_t>(u) + 1];
+            for (Index k = m_edge_start[static_cast<std::size_t>(u)]; k < end; ++k) {
                 const VertexEdge& e = m_edges[static_cast<std::size_t>(k)];
-                const Index b = local[static_cast<std::size_t>(e.vertex)];
-                if (b < 0 || decider[static_cast<std::size_t>(b)] >= 0 || !edge_clear(u, e))
+                Index& s = state[static_cast<std::size_t>(e.vertex)];
+                if (s != UNGROUPED || !edge_clear(u, e))
                     continue;
-                decider[static_cast<std::size_t>(b)] = static_cast<Index>(i);
-                queue.push_back(b);
+                s = group;
+                queue[tail++] = e.vertex;
                 if (!path)
                     continue;
                 // The sum rounded up by a relative 2⁻⁴⁰, far above the rounding of its terms.
@@ -96,10 +119,18 @@ Index AabbTree::clear_edge_groups(CRef<Positions> vertices, const AabbTree& othe
                 const double* y = data + stride * e.vertex;
                 const double length =
                     std::sqrt((x[0] - y[0]) * (x[0] - y[0]) + (x[1] - y[1]) * (x[1] - y[1]) + (x[2] - y[2]) * (x[2] - y[2]));
-                std::vector<double>& p = *path;
-                p[static_cast<std::size_t>(b)] = (p[static_cast<std::size_t>(a)] + length) * (1.0 + 0x1p-40);
+                length_to[static_cast<std::size_t>(e.vertex)] =
+                    (length_to[static_cast<std::size_t>(u)] + length) * (1.0 + 0x1p-40);
             }
         }
+    }
+    decider.resize(n);
+    for (std::size_t i = 0; i < n; ++i)
+        decider[i] = state[static_cast<std::size_t>(candidates[i])];
+    if (path) {
+        path->resize(n);
+        for (std::size_t i = 0; i < n; ++i)
+            (*path)[i] = length_to[static_cast<std::size_t>(candidates[i])];
     }
     return groups;
 }
