@@ -43,68 +43,82 @@ struct Block {
 /// stable counting sort by vertex over each body's pairs gives that order in O(points + vertices);
 /// a body with few points against many vertices sorts keys instead. `slots` holds each inside
 /// slot's point with its depth and normal; empty: the points carry body, vertex and other only.
+/// The bodies are TBB tasks, each writing its own range of the output.
 std::vector<ContactPoint> sorted_points(const std::vector<ContactSurface>& surfaces,
                                         const std::vector<PairCandidates>& candidates,
                                         const std::vector<std::size_t>& offsets, const std::vector<ContactPoint>& slots,
-                                        const std::vector<unsigned char>& inside, std::size_t total)
+                                        const std::vector<unsigned char>& inside)
 {
-    std::vector<ContactPoint> points;
-    points.reserve(total);
-    std::vector<Index> start;
-    std::vector<std::size_t> order;
-    std::vector<std::pair<std::uint64_t, std::size_t>> keys;
+    // Each body's pairs first .. last − 1 and the start of its points in the output.
+    struct BodyRange {
+        std::size_t first, last, output;
+    };
+    std::vector<BodyRange> bodies;
+    std::size_t total = 0;
     for (std::size_t first = 0; first < candidates.size();) {
-        const Index body = candidates[first].body;
-        std::size_t last = first;
-        std::size_t count = 0;
-        for (; last < candidates.size() && candidates[last].body == body; ++last)
+        std::size_t last = first, count = 0;
+        for (; last < candidates.size() && candidates[last].body == candidates[first].body; ++last)
             for (std::size_t i = offsets[last]; i < offsets[last + 1]; ++i)
                 count += inside[i];
-        // Slot i of this body's pairs: its pair, found among few.
-        const auto emit = [&](std::size_t i) {
-            if (!slots.empty()) {
-                points.push_back(slots[i]);
-                return;
-            }
-            const auto k = static_cast<std::size_t>(
-                std::upper_bound(offsets.begin() + static_cast<std::ptrdiff_t>(first),
-                                 offsets.begin() + static_cast<std::ptrdiff_t>(last), i) -
-                offsets.begin() - 1);
-            ContactPoint& c = points.emplace_back();
-            c.body = body;
-            c.vertex = candidates[k].vertices[i - offsets[k]];
-            c.other = candidates[k].other;
-        };
-        const auto vertex_of = [&](std::size_t k, std::size_t i) { return candidates[k].vertices[i - offsets[k]]; };
-        const auto vertices = static_cast<std::size_t>(surfaces[static_cast<std::size_t>(body)].vertices.rows());
-        if (8 * count >= vertices) {
-            start.assign(vertices + 1, 0);
-            for (std::size_t k = first; k < last; ++k)
-                for (std::size_t i = offsets[k]; i < offsets[k + 1]; ++i)
-                    start[static_cast<std::size_t>(vertex_of(k, i)) + 1] += inside[i];
-            for (std::size_t v = 0; v < vertices; ++v)
-                start[v + 1] += start[v];
-            order.resize(count);
-            for (std::size_t k = first; k < last; ++k) // others ascending: stable within a vertex
-                for (std::size_t i = offsets[k]; i < offsets[k + 1]; ++i)
-                    if (inside[i])
-                        order[static_cast<std::size_t>(start[static_cast<std::size_t>(vertex_of(k, i))]++)] = i;
-            for (const std::size_t i : order)
-                emit(i);
-        } else {
-            keys.clear();
-            for (std::size_t k = first; k < last; ++k)
-                for (std::size_t i = offsets[k]; i < offsets[k + 1]; ++i)
-                    if (inside[i])
-                        keys.emplace_back((static_cast<std::uint64_t>(vertex_of(k, i)) << 32) |
-                                              static_cast<std::uint32_t>(candidates[k].other),
-                                          i);
-            std::sort(keys.begin(), keys.end());
-            for (const auto& key : keys)
-                emit(key.second);
-        }
+        bodies.push_back({first, last, total});
+        total += count;
         first = last;
     }
+    std::vector<ContactPoint> points(total);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, bodies.size(), 1), [&](const tbb::blocked_range<std::size_t>& r) {
+        std::vector<Index> start;
+        std::vector<std::size_t> order;
+        std::vector<std::pair<std::uint64_t, std::size_t>> keys;
+        for (std::size_t j = r.begin(); j < r.end(); ++j) {
+            const auto [first, last, output] = bodies[j];
+            const std::size_t count = (j + 1 < bodies.size() ? bodies[j + 1].output : total) - output;
+            const Index body = candidates[first].body;
+            ContactPoint* out = points.data() + output;
+            // Slot i of this body's pairs: its pair, found among few.
+            const auto emit = [&](std::size_t i) {
+                if (!slots.empty()) {
+                    *out++ = slots[i];
+                    return;
+                }
+                const auto k = static_cast<std::size_t>(
+                    std::upper_bound(offsets.begin() + static_cast<std::ptrdiff_t>(first),
+                                     offsets.begin() + static_cast<std::ptrdiff_t>(last), i) -
+                    offsets.begin() - 1);
+                ContactPoint& c = *out++;
+                c.body = body;
+                c.vertex = candidates[k].vertices[i - offsets[k]];
+                c.other = candidates[k].other;
+            };
+            const auto vertex_of = [&](std::size_t k, std::size_t i) { return candidates[k].vertices[i - offsets[k]]; };
+            const auto vertices = static_cast<std::size_t>(surfaces[static_cast<std::size_t>(body)].vertices.rows());
+            if (8 * count >= vertices) {
+                start.assign(vertices + 1, 0);
+                for (std::size_t k = first; k < last; ++k)
+                    for (std::size_t i = offsets[k]; i < offsets[k + 1]; ++i)
+                        start[static_cast<std::size_t>(vertex_of(k, i)) + 1] += inside[i];
+                for (std::size_t v = 0; v < vertices; ++v)
+                    start[v + 1] += start[v];
+                order.resize(count);
+                for (std::size_t k = first; k < last; ++k) // others ascending: stable within a vertex
+                    for (std::size_t i = offsets[k]; i < offsets[k + 1]; ++i)
+                        if (inside[i])
+                            order[static_cast<std::size_t>(start[static_cast<std::size_t>(vertex_of(k, i))]++)] = i;
+                for (const std::size_t i : order)
+                    emit(i);
+            } else {
+                keys.clear();
+                for (std::size_t k = first; k < last; ++k)
+                    for (std::size_t i = offsets[k]; i < offsets[k + 1]; ++i)
+                        if (inside[i])
+                            keys.emplace_back((static_cast<std::uint64_t>(vertex_of(k, i)) << 32) |
+                                                  static_cast<std::uint32_t>(candidates[k].other),
+                                              i);
+                std::sort(keys.begin(), keys.end());
+                for (const auto& key : keys)
+                    emit(key.second);
+            }
+        }
+    });
     return points;
 }
 
@@ -191,7 +205,7 @@ std::vector<ContactPoint> run_detection(const std::vector<ContactSurface>& surfa
     }
     if (stats)
         *stats = sum;
-    return sorted_points(surfaces, candidates, offsets, slots, is_inside, static_cast<std::size_t>(sum.inside));
+    return sorted_points(surfaces, candidates, offsets, slots, is_inside);
 }
 
 Index count_pairs(const std::vector<PairCandidates>& candidates) { return static_cast<Index>(candidates.size() / 2); }

@@ -13,12 +13,7 @@ namespace coro::detail {
 namespace {
 
 // Tested vertices per task.
-constexpr Index TEST_BLOCK = 256;
-
-struct TestBlock {
-    std::size_t pair;
-    std::size_t first, last; // range of that pair's tested candidates
-};
+constexpr std::size_t TEST_BLOCK = 256;
 
 } // namespace
 
@@ -28,9 +23,6 @@ std::vector<std::vector<InsideTest>> grouped_inside_tests(const std::vector<Cont
                                                           bool distance_bounds)
 {
     const std::size_t pairs = candidates.size();
-    std::vector<std::vector<Index>> decider(pairs);
-    std::vector<std::vector<double>> path(pairs);
-    std::vector<std::vector<Index>> tested(pairs); // the candidates that are their own decider
     // The face pairs of each body pair, found once for both directions: candidates holds (a, b)
     // and (b, a), the region I is the same.
     std::vector<std::vector<std::array<Index, 2>>> face_pairs(pairs);
@@ -59,7 +51,12 @@ std::vector<std::vector<InsideTest>> grouped_inside_tests(const std::vector<Cont
                 body.tree.overlapping_faces(other.tree, pair.overlap, face_pairs[walks[w]]);
         }
     });
+    // Per pair, in one task: the groups, the tests of their first vertices (blocks of them as
+    // nested tasks when there are many) and the answers shared with the rest of each group.
+    std::vector<std::vector<InsideTest>> answers(pairs);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, pairs, 1), [&](const tbb::blocked_range<std::size_t>& r) {
+        std::vector<Index> decider, tested;
+        std::vector<double> path;
         for (std::size_t k = r.begin(); k < r.end(); ++k) {
             const PairCandidates& pair = candidates[k];
             const ContactSurface& body = surfaces[static_cast<std::size_t>(pair.body)];
@@ -67,56 +64,51 @@ std::vector<std::vector<InsideTest>> grouped_inside_tests(const std::vector<Cont
             const std::size_t n = pair.vertices.size();
             if (other.closed) {
                 body.tree.clear_edge_groups(body.vertices, other.tree, other.vertices, face_pairs[lower[k]],
-                                            lower[k] == k ? 0 : 1, pair.vertices, decider[k],
-                                            distance_bounds ? &path[k] : nullptr);
+                                            lower[k] == k ? 0 : 1, pair.vertices, decider,
+                                            distance_bounds ? &path : nullptr);
             } else {
-                decider[k].resize(n);
+                decider.resize(n);
                 for (std::size_t i = 0; i < n; ++i)
-                    decider[k][i] = static_cast<Index>(i);
+                    decider[i] = static_cast<Index>(i);
                 if (distance_bounds)
-                    path[k].assign(n, 0.0);
+                    path.assign(n, 0.0);
             }
+            tested.clear();
             for (std::size_t i = 0; i < n; ++i)
-                if (decider[k][i] == static_cast<Index>(i))
-                    tested[k].push_back(static_cast<Index>(i));
-        }
-    });
+                if (decider[i] == static_cast<Index>(i))
+                    tested.push_back(static_cast<Index>(i));
 
-    std::vector<std::vector<InsideTest>> answers(pairs);
-    std::vector<TestBlock> blocks;
-    for (std::size_t k = 0; k < pairs; ++k) {
-        answers[k].resize(candidates[k].vertices.size());
-        for (std::size_t first = 0; first < tested[k].size(); first += TEST_BLOCK)
-            blocks.push_back({k, first, std::min(tested[k].size(), first + TEST_BLOCK)});
-    }
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, blocks.size(), 1), [&](const tbb::blocked_range<std::size_t>& r) {
-        Vec3 points[TEST_BLOCK];
-        InsideTest results[TEST_BLOCK];
-        for (std::size_t b = r.begin(); b < r.end(); ++b) {
-            const TestBlock& block = blocks[b];
-            const PairCandidates& pair = candidates[block.pair];
-            const ContactSurface& body = surfaces[static_cast<std::size_t>(pair.body)];
-            const Index count = static_cast<Index>(block.last - block.first);
-            for (Index t = 0; t < count; ++t) {
-                const Index i = tested[block.pair][block.first + static_cast<std::size_t>(t)];
-                points[t] = body.vertices.row(pair.vertices[static_cast<std::size_t>(i)]).transpose();
+            std::vector<InsideTest>& answer = answers[k];
+            answer.resize(n);
+            const auto test_block = [&](std::size_t first, std::size_t last) {
+                Vec3 points[TEST_BLOCK];
+                InsideTest results[TEST_BLOCK];
+                const auto count = static_cast<Index>(last - first);
+                for (Index t = 0; t < count; ++t) {
+                    const Index i = tested[first + static_cast<std::size_t>(t)];
+                    points[t] = body.vertices.row(pair.vertices[static_cast<std::size_t>(i)]).transpose();
+                }
+                inside_tests(other, points, count, DetectionMode::EXACT, {}, tolerances, results);
+                for (Index t = 0; t < count; ++t)
+                    answer[static_cast<std::size_t>(tested[first + static_cast<std::size_t>(t)])] = results[t];
+            };
+            if (tested.size() <= TEST_BLOCK) {
+                test_block(0, tested.size());
+            } else {
+                const std::size_t blocks = (tested.size() + TEST_BLOCK - 1) / TEST_BLOCK;
+                tbb::parallel_for(tbb::blocked_range<std::size_t>(0, blocks, 1),
+                                  [&](const tbb::blocked_range<std::size_t>& b) {
+                                      for (std::size_t j = b.begin(); j < b.end(); ++j)
+                                          test_block(j * TEST_BLOCK, std::min(tested.size(), (j + 1) * TEST_BLOCK));
+                                  });
             }
-            inside_tests(surfaces[static_cast<std::size_t>(pair.other)], points, count, DetectionMode::EXACT, {},
-                         tolerances, results);
-            for (Index t = 0; t < count; ++t)
-                answers[block.pair][static_cast<std::size_t>(tested[block.pair][block.first + static_cast<std::size_t>(t)])] =
-                    results[t];
-        }
-    });
 
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, pairs, 1), [&](const tbb::blocked_range<std::size_t>& r) {
-        for (std::size_t k = r.begin(); k < r.end(); ++k)
-            for (std::size_t i = 0; i < answers[k].size(); ++i) {
-                const std::size_t d = static_cast<std::size_t>(decider[k][i]);
+            for (std::size_t i = 0; i < n; ++i) {
+                const std::size_t d = static_cast<std::size_t>(decider[i]);
                 if (d == i)
                     continue;
-                const InsideTest& from = answers[k][d];
-                InsideTest& to = answers[k][i];
+                const InsideTest& from = answer[d];
+                InsideTest& to = answer[i];
                 to = InsideTest();
                 to.inside = from.inside;
                 to.deciding_axis = DECIDED_BY_NEIGHBOUR;
@@ -124,8 +116,9 @@ std::vector<std::vector<InsideTest>> grouped_inside_tests(const std::vector<Cont
                 // Some point of the surface lies within the decider's bound of it; the sum is
                 // rounded up by a relative 10⁻¹² (far above the rounding of the two terms).
                 if (distance_bounds)
-                    to.surface_distance_bound = (from.surface_distance_bound + path[k][i]) * (1.0 + 1e-12);
+                    to.surface_distance_bound = (from.surface_distance_bound + path[i]) * (1.0 + 1e-12);
             }
+        }
     });
     return answers;
 }

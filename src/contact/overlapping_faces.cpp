@@ -3,6 +3,9 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include <algorithm>
+#include <array>
+
 namespace coro {
 
 namespace {
@@ -28,6 +31,16 @@ WideBox wide_box(const Aabb& box)
         w.hi[j] = _mm_set1_ps(detail::float_up(box.max[j]));
     }
     return w;
+}
+
+/// Whether boxes a, b and c have a point in common (closed): on each axis the largest lower
+/// bound is at most the smallest upper bound. Without branches, as the outcome is hard to predict.
+bool three_boxes_meet(const Aabb& a, const Aabb& b, const Aabb& c)
+{
+    bool meet = true;
+    for (int j = 0; j < 3; ++j)
+        meet &= std::max(std::max(a.min[j], b.min[j]), c.min[j]) <= std::min(std::min(a.max[j], b.max[j]), c.max[j]);
+    return meet;
 }
 
 } // namespace
@@ -81,7 +94,7 @@ void AabbTree::walk_overlapping(const AabbTree& other, const Aabb& region, Index
     const auto emit = [&](Index slot_a, Index slot_b) {
         const Aabb& box_a = m_face_boxes[static_cast<std::size_t>(slot_a)];
         const Aabb& box_b = other.m_face_boxes[static_cast<std::size_t>(slot_b)];
-        if (boxes_meet(box_a, box_b) && boxes_meet(box_a, region) && boxes_meet(box_b, region))
+        if (three_boxes_meet(box_a, box_b, region))
             slots.push_back({slot_a, slot_b});
     };
     // One face against a subtree of the other tree.
@@ -104,10 +117,12 @@ void AabbTree::walk_overlapping(const AabbTree& other, const Aabb& region, Index
             }
         }
     };
-    std::vector<std::array<Index, 2>> stack{{a_root, b_root}};
-    while (!stack.empty()) {
-        const auto [na, nb] = stack.back();
-        stack.pop_back();
+    // Each pair taken pushes at most 16 and goes one level down both trees.
+    std::array<Index, 2> stack[16 * MAX_DEPTH + 1];
+    int top = 0;
+    stack[top++] = {a_root, b_root};
+    while (top > 0) {
+        const auto [na, nb] = stack[--top];
         const WideNode& a = m_nodes[static_cast<std::size_t>(na)];
         const WideNode& b = other.m_nodes[static_cast<std::size_t>(nb)];
         const int mask_b = other.lanes_meeting(nb, wide_region.lo, wide_region.hi);
@@ -125,7 +140,7 @@ void AabbTree::walk_overlapping(const AabbTree& other, const Aabb& region, Index
                 const int k = __builtin_ctz(static_cast<unsigned>(mb));
                 const bool face_b = (b.face_mask >> k) & 1;
                 if (!face_a && !face_b) {
-                    stack.push_back({a.child[i], b.child[k]});
+                    stack[top++] = {a.child[i], b.child[k]};
                 } else if (face_a && face_b) {
                     emit(-1 - a.child[i], -1 - b.child[k]);
                 } else if (face_a) {
