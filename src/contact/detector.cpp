@@ -33,6 +33,8 @@ void block_points(const std::vector<ContactSurface>& surfaces, const PairCandida
         points[i] = body.vertices.row(pair.vertices[static_cast<std::size_t>(first + i)]).transpose();
 }
 
+Index count_pairs(const std::vector<PairCandidates>& candidates) { return static_cast<Index>(candidates.size() / 2); }
+
 struct Block {
     std::size_t pair;
     Index begin, end;
@@ -122,93 +124,125 @@ std::vector<ContactPoint> sorted_points(const std::vector<ContactSurface>& surfa
     return points;
 }
 
+/// The part of a detection pass after the broad phase: the answers of the inside tests, taken
+/// block by block (blocks of at most VERTEX_BLOCK candidates of one pair, in any order and from
+/// any thread), become contact points with their depth and normal when asked for, and finish()
+/// returns them sorted.
+class DetectionPass {
+public:
+    DetectionPass(const std::vector<ContactSurface>& surfaces, const std::vector<PairCandidates>& candidates,
+                  bool contact_data)
+        : m_surfaces(surfaces), m_candidates(candidates), m_contact_data(contact_data), m_offsets(candidates.size() + 1, 0)
+    {
+        for (std::size_t k = 0; k < candidates.size(); ++k)
+            m_offsets[k + 1] = m_offsets[k] + candidates[k].vertices.size();
+        if (contact_data) { // the depth searches skip faces by their planes: bring those up to date
+            std::vector<Index> others;
+            for (const PairCandidates& c : candidates)
+                if (!c.vertices.empty())
+                    others.push_back(c.other);
+            std::sort(others.begin(), others.end());
+            others.erase(std::unique(others.begin(), others.end()), others.end());
+            tbb::parallel_for(tbb::blocked_range<std::size_t>(0, others.size(), 1),
+                              [&](const tbb::blocked_range<std::size_t>& r) {
+                                  for (std::size_t i = r.begin(); i < r.end(); ++i) {
+                                      const ContactSurface& s = surfaces[static_cast<std::size_t>(others[i])];
+                                      s.tree.update_planes(s.vertices);
+                                  }
+                              });
+        }
+        // Points with depth and normal are made as the answers come; without, the sorted
+        // output makes them from the candidates.
+        m_slots.resize(contact_data ? m_offsets.back() : 0);
+        m_inside.assign(m_offsets.back(), 0);
+    }
+
+    /// Candidates first .. first + count − 1 of pair k, answered by results[0 .. count − 1].
+    void take(std::size_t k, Index first, Index count, const InsideTest* results)
+    {
+        DetectionStats& counts = m_stats.local();
+        const PairCandidates& pair = m_candidates[k];
+        // The previous inside vertex's nearest face (vertices come in spatial order) seeds the
+        // next nearest-point search; reset per block, so the work does not depend on the
+        // scheduling (and the answers do not depend on the hints at all).
+        Index hint_face = -1;
+        for (Index i = first; i < first + count; ++i) {
+            const InsideTest& result = results[i - first];
+            ++counts.candidate_vertices;
+            counts.on_surface += result.on_surface ? 1 : 0;
+            counts.winding_fallbacks += result.deciding_axis == 3 ? 1 : 0;
+            counts.by_neighbour += result.deciding_axis == DECIDED_BY_NEIGHBOUR ? 1 : 0;
+            if (!result.inside)
+                continue;
+            ++counts.inside;
+            const std::size_t slot = m_offsets[k] + static_cast<std::size_t>(i);
+            m_inside[slot] = 1;
+            if (m_contact_data) {
+                ContactPoint& c = m_slots[slot];
+                c = contact_point(m_surfaces, pair.body, pair.vertices[static_cast<std::size_t>(i)], pair.other,
+                                  result.surface_distance_bound, hint_face);
+                hint_face = c.face;
+            }
+        }
+    }
+
+    bool contact_data() const { return m_contact_data; }
+
+    std::vector<ContactPoint> finish(Index pairs, DetectionStats* stats)
+    {
+        if (stats) {
+            DetectionStats sum;
+            sum.pairs = pairs;
+            for (const DetectionStats& s : m_stats) {
+                sum.candidate_vertices += s.candidate_vertices;
+                sum.inside += s.inside;
+                sum.winding_fallbacks += s.winding_fallbacks;
+                sum.on_surface += s.on_surface;
+                sum.by_neighbour += s.by_neighbour;
+            }
+            *stats = sum;
+        }
+        return sorted_points(m_surfaces, m_candidates, m_offsets, m_slots, m_inside);
+    }
+
+private:
+    const std::vector<ContactSurface>& m_surfaces;
+    const std::vector<PairCandidates>& m_candidates;
+    bool m_contact_data;
+    std::vector<std::size_t> m_offsets; // pair k's candidate i has slot offsets[k] + i
+    std::vector<ContactPoint> m_slots;
+    std::vector<unsigned char> m_inside;
+    tbb::enumerable_thread_specific<DetectionStats> m_stats;
+};
+
+/// A pass whose answers come from `inside(k, first, count, points, results)` for each block of
+/// candidates, the blocks as TBB tasks.
 template <class Inside>
 std::vector<ContactPoint> run_detection(const std::vector<ContactSurface>& surfaces,
-                                        const std::vector<PairCandidates>& candidates, Index pairs,
-                                        const Inside& inside, bool contact_data, DetectionStats* stats)
+                                        const std::vector<PairCandidates>& candidates, const Inside& inside,
+                                        bool contact_data, DetectionStats* stats)
 {
-    // One slot per candidate vertex: pair k's vertex i at offsets[k] + i.
-    std::vector<std::size_t> offsets(candidates.size() + 1, 0);
+    DetectionPass pass(surfaces, candidates, contact_data);
     std::vector<Block> blocks;
     for (std::size_t k = 0; k < candidates.size(); ++k) {
         const auto n = static_cast<Index>(candidates[k].vertices.size());
-        offsets[k + 1] = offsets[k] + static_cast<std::size_t>(n);
         for (Index b = 0; b < n; b += VERTEX_BLOCK)
             blocks.push_back({k, b, std::min(n, b + VERTEX_BLOCK)});
     }
-
-    if (contact_data) { // the depth searches skip faces by their planes: bring those up to date
-        std::vector<Index> others;
-        for (const PairCandidates& c : candidates)
-            if (!c.vertices.empty())
-                others.push_back(c.other);
-        std::sort(others.begin(), others.end());
-        others.erase(std::unique(others.begin(), others.end()), others.end());
-        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, others.size(), 1),
-                          [&](const tbb::blocked_range<std::size_t>& r) {
-                              for (std::size_t i = r.begin(); i < r.end(); ++i) {
-                                  const ContactSurface& s = surfaces[static_cast<std::size_t>(others[i])];
-                                  s.tree.update_planes(s.vertices);
-                              }
-                          });
-    }
-
-    // Points with depth and normal are made in the parallel loop; without, the sorted output
-    // makes them from the candidates.
-    std::vector<ContactPoint> slots(contact_data ? offsets.back() : 0);
-    std::vector<unsigned char> is_inside(offsets.back(), 0);
-    tbb::enumerable_thread_specific<DetectionStats> local_stats;
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, blocks.size(), 1),
                       [&](const tbb::blocked_range<std::size_t>& range) {
-                          DetectionStats& counts = local_stats.local();
+                          Vec3 points[VERTEX_BLOCK];
+                          InsideTest results[VERTEX_BLOCK];
                           for (std::size_t b = range.begin(); b < range.end(); ++b) {
                               const Block& block = blocks[b];
-                              const PairCandidates& pair = candidates[block.pair];
-                              // The previous inside vertex's nearest face (vertices come in
-                              // spatial order) seeds the next nearest-point search; reset per
-                              // block, so the work does not depend on the scheduling (and the
-                              // answers do not depend on the hints at all).
-                              Index hint_face = -1;
-                              InsideTest scratch[VERTEX_BLOCK];
-                              const InsideTest* results =
-                                  inside(block.pair, block.begin, block.end - block.begin, scratch);
-                              for (Index i = block.begin; i < block.end; ++i) {
-                                  const Index v = pair.vertices[static_cast<std::size_t>(i)];
-                                  const InsideTest& result = results[i - block.begin];
-                                  ++counts.candidate_vertices;
-                                  counts.on_surface += result.on_surface ? 1 : 0;
-                                  counts.winding_fallbacks += result.deciding_axis == 3 ? 1 : 0;
-                                  counts.by_neighbour += result.deciding_axis == DECIDED_BY_NEIGHBOUR ? 1 : 0;
-                                  if (!result.inside)
-                                      continue;
-                                  ++counts.inside;
-                                  const std::size_t slot = offsets[block.pair] + static_cast<std::size_t>(i);
-                                  is_inside[slot] = 1;
-                                  if (contact_data) {
-                                      ContactPoint& c = slots[slot];
-                                      c = contact_point(surfaces, pair.body, v, pair.other,
-                                                        result.surface_distance_bound, hint_face);
-                                      hint_face = c.face;
-                                  }
-                              }
+                              const Index count = block.end - block.begin;
+                              block_points(surfaces, candidates[block.pair], block.begin, count, points);
+                              inside(block.pair, points, count, results);
+                              pass.take(block.pair, block.begin, count, results);
                           }
                       });
-
-    DetectionStats sum;
-    sum.pairs = pairs;
-    for (const DetectionStats& s : local_stats) {
-        sum.candidate_vertices += s.candidate_vertices;
-        sum.inside += s.inside;
-        sum.winding_fallbacks += s.winding_fallbacks;
-        sum.on_surface += s.on_surface;
-        sum.by_neighbour += s.by_neighbour;
-    }
-    if (stats)
-        *stats = sum;
-    return sorted_points(surfaces, candidates, offsets, slots, is_inside);
+    return pass.finish(count_pairs(candidates), stats);
 }
-
-Index count_pairs(const std::vector<PairCandidates>& candidates) { return static_cast<Index>(candidates.size() / 2); }
 
 } // namespace
 
@@ -296,23 +330,39 @@ std::vector<ContactPoint> detect_contacts(const std::vector<ContactSurface>& sur
                                           const DetectionSettings& settings, DetectionStats* stats)
 {
     const std::vector<PairCandidates> candidates = contact_candidates(surfaces, settings.mode);
-    const bool grouped = settings.share_answers && settings.mode == DetectionMode::EXACT;
-    std::vector<std::vector<InsideTest>> answers;
-    if (grouped)
-        answers = detail::grouped_inside_tests(surfaces, candidates, settings.tolerances, settings.contact_data);
-    return run_detection(
-        surfaces, candidates, count_pairs(candidates),
-        [&](std::size_t k, Index first, Index count, InsideTest* scratch) -> const InsideTest* {
-            if (grouped)
-                return answers[k].data() + first;
-            Vec3 points[VERTEX_BLOCK];
-            block_points(surfaces, candidates[k], first, count, points);
-            const PairCandidates& pair = candidates[k];
-            inside_tests(surfaces[static_cast<std::size_t>(pair.other)], points, count, settings.mode, pair.faces,
-                         settings.tolerances, scratch);
-            return scratch;
-        },
-        settings.contact_data, stats);
+    if (!settings.share_answers || settings.mode != DetectionMode::EXACT)
+        return run_detection(
+            surfaces, candidates,
+            [&](std::size_t k, const Vec3* points, Index count, InsideTest* results) {
+                const PairCandidates& pair = candidates[k];
+                inside_tests(surfaces[static_cast<std::size_t>(pair.other)], points, count, settings.mode, pair.faces,
+                             settings.tolerances, results);
+            },
+            settings.contact_data, stats);
+
+    // Each pair's answers are taken in its own task, as they come; with depth searches to do,
+    // its blocks are nested tasks.
+    DetectionPass pass(surfaces, candidates, settings.contact_data);
+    detail::grouped_inside_tests(
+        surfaces, candidates, settings.tolerances, settings.contact_data,
+        [&](std::size_t k, const std::vector<InsideTest>& answers) {
+            const auto n = static_cast<Index>(answers.size());
+            const Index blocks = (n + VERTEX_BLOCK - 1) / VERTEX_BLOCK;
+            const auto take_block = [&](Index b) {
+                const Index first = b * VERTEX_BLOCK;
+                pass.take(k, first, std::min(VERTEX_BLOCK, n - first), answers.data() + first);
+            };
+            if (!pass.contact_data() || blocks <= 1) {
+                for (Index b = 0; b < blocks; ++b)
+                    take_block(b);
+                return;
+            }
+            tbb::parallel_for(tbb::blocked_range<Index>(0, blocks, 1), [&](const tbb::blocked_range<Index>& r) {
+                for (Index b = r.begin(); b < r.end(); ++b)
+                    take_block(b);
+            });
+        });
+    return pass.finish(count_pairs(candidates), stats);
 }
 
 std::vector<ContactPoint> detect_contacts(const std::vector<ContactSurface>& surfaces,
@@ -321,13 +371,10 @@ std::vector<ContactPoint> detect_contacts(const std::vector<ContactSurface>& sur
 {
     const std::vector<PairCandidates> candidates = contact_candidates(surfaces, DetectionMode::EXACT);
     return run_detection(
-        surfaces, candidates, count_pairs(candidates),
-        [&](std::size_t k, Index first, Index count, InsideTest* scratch) -> const InsideTest* {
-            Vec3 points[VERTEX_BLOCK];
-            block_points(surfaces, candidates[k], first, count, points);
+        surfaces, candidates,
+        [&](std::size_t k, const Vec3* points, Index count, InsideTest* results) {
             for (Index i = 0; i < count; ++i)
-                scratch[i] = inside(candidates[k].other, points[i]);
-            return scratch;
+                results[i] = inside(candidates[k].other, points[i]);
         },
         contact_data, stats);
 }

@@ -6,6 +6,7 @@
 #include <corocontact/core/error.hpp>
 
 #include <algorithm>
+#include <functional>
 #include <tuple>
 
 namespace coro::detail {
@@ -17,10 +18,9 @@ constexpr std::size_t TEST_BLOCK = 256;
 
 } // namespace
 
-std::vector<std::vector<InsideTest>> grouped_inside_tests(const std::vector<ContactSurface>& surfaces,
-                                                          const std::vector<PairCandidates>& candidates,
-                                                          const AxisRayTolerances& tolerances,
-                                                          bool distance_bounds)
+void grouped_inside_tests(const std::vector<ContactSurface>& surfaces, const std::vector<PairCandidates>& candidates,
+                          const AxisRayTolerances& tolerances, bool distance_bounds,
+                          const std::function<void(std::size_t pair, const std::vector<InsideTest>& answers)>& use)
 {
     const std::size_t pairs = candidates.size();
     // The face pairs of each body pair, found once for both directions: candidates holds (a, b)
@@ -52,11 +52,12 @@ std::vector<std::vector<InsideTest>> grouped_inside_tests(const std::vector<Cont
         }
     });
     // Per pair, in one task: the groups, the tests of their first vertices (blocks of them as
-    // nested tasks when there are many) and the answers shared with the rest of each group.
-    std::vector<std::vector<InsideTest>> answers(pairs);
+    // nested tasks when there are many), the answers shared with the rest of each group, and
+    // their use.
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, pairs, 1), [&](const tbb::blocked_range<std::size_t>& r) {
         std::vector<Index> decider, tested;
         std::vector<double> path;
+        std::vector<InsideTest> answer;
         for (std::size_t k = r.begin(); k < r.end(); ++k) {
             const PairCandidates& pair = candidates[k];
             const ContactSurface& body = surfaces[static_cast<std::size_t>(pair.body)];
@@ -78,7 +79,6 @@ std::vector<std::vector<InsideTest>> grouped_inside_tests(const std::vector<Cont
                 if (decider[i] == static_cast<Index>(i))
                     tested.push_back(static_cast<Index>(i));
 
-            std::vector<InsideTest>& answer = answers[k];
             answer.resize(n);
             const auto test_block = [&](std::size_t first, std::size_t last) {
                 Vec3 points[TEST_BLOCK];
@@ -118,9 +118,9 @@ std::vector<std::vector<InsideTest>> grouped_inside_tests(const std::vector<Cont
                 if (distance_bounds)
                     to.surface_distance_bound = (from.surface_distance_bound + path[i]) * (1.0 + 1e-12);
             }
+            use(k, answer);
         }
     });
-    return answers;
 }
 
 } // namespace coro::detail
