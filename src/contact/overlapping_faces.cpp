@@ -34,13 +34,16 @@ WideBox wide_box(const Aabb& box)
 }
 
 /// Whether boxes a, b and c have a point in common (closed): on each axis the largest lower
-/// bound is at most the smallest upper bound. Without branches, as the outcome is hard to predict.
+/// bound is at most the smallest upper bound. Without branches, as the outcome is hard to
+/// predict; x and y in one register.
 bool three_boxes_meet(const Aabb& a, const Aabb& b, const Aabb& c)
 {
-    bool meet = true;
-    for (int j = 0; j < 3; ++j)
-        meet &= std::max(std::max(a.min[j], b.min[j]), c.min[j]) <= std::min(std::min(a.max[j], b.max[j]), c.max[j]);
-    return meet;
+    const __m128d lo = _mm_max_pd(_mm_max_pd(_mm_loadu_pd(a.min.data()), _mm_loadu_pd(b.min.data())),
+                                  _mm_loadu_pd(c.min.data()));
+    const __m128d hi = _mm_min_pd(_mm_min_pd(_mm_loadu_pd(a.max.data()), _mm_loadu_pd(b.max.data())),
+                                  _mm_loadu_pd(c.max.data()));
+    const bool z = std::max(std::max(a.min[2], b.min[2]), c.min[2]) <= std::min(std::min(a.max[2], b.max[2]), c.max[2]);
+    return (_mm_movemask_pd(_mm_cmple_pd(lo, hi)) == 3) & z;
 }
 
 } // namespace
@@ -71,6 +74,8 @@ void AabbTree::overlapping_faces(const AabbTree& other, const Aabb& region, Pair
         walk_overlapping(other, region, 0, 0, pairs);
     } else {
         std::vector<Pairs> parts(m_task_roots.size());
+        for (Pairs& part : parts) // about what a task emits in deep overlap: few regrowths
+            part.reserve(256);
         tbb::parallel_for(tbb::blocked_range<std::size_t>(0, parts.size(), 1),
                           [&](const tbb::blocked_range<std::size_t>& r) {
                               for (std::size_t t = r.begin(); t < r.end(); ++t)
@@ -97,12 +102,10 @@ void AabbTree::walk_overlapping(const AabbTree& other, const Aabb& region, Index
         if (three_boxes_meet(box_a, box_b, region))
             slots.push_back({slot_a, slot_b});
     };
-    // One face against a subtree of the other tree.
+    // One face, its float box `box` (a lane box of a node: it bounds the face's exact box),
+    // against a subtree of the other tree.
     Index face_stack[STACK_SIZE];
-    const auto face_against = [&](const AabbTree& tree, Index root, const Aabb& face_box, auto&& emit_slot) {
-        if (!boxes_meet(face_box, region))
-            return;
-        const WideBox box = wide_box(face_box);
+    const auto face_against = [&](const AabbTree& tree, Index root, const WideBox& box, auto&& emit_slot) {
         int top = 0;
         face_stack[top++] = root;
         while (top > 0) {
@@ -130,13 +133,13 @@ void AabbTree::walk_overlapping(const AabbTree& other, const Aabb& region, Index
             continue;
         for (int ma = lanes_meeting(na, wide_region.lo, wide_region.hi); ma != 0; ma &= ma - 1) {
             const int i = __builtin_ctz(static_cast<unsigned>(ma));
-            __m128 lo[3], hi[3];
+            WideBox lane_a;
             for (int j = 0; j < 3; ++j) {
-                lo[j] = _mm_set1_ps(a.lo[j][i]);
-                hi[j] = _mm_set1_ps(a.hi[j][i]);
+                lane_a.lo[j] = _mm_set1_ps(a.lo[j][i]);
+                lane_a.hi[j] = _mm_set1_ps(a.hi[j][i]);
             }
             const bool face_a = (a.face_mask >> i) & 1;
-            for (int mb = other.lanes_meeting(nb, lo, hi) & mask_b; mb != 0; mb &= mb - 1) {
+            for (int mb = other.lanes_meeting(nb, lane_a.lo, lane_a.hi) & mask_b; mb != 0; mb &= mb - 1) {
                 const int k = __builtin_ctz(static_cast<unsigned>(mb));
                 const bool face_b = (b.face_mask >> k) & 1;
                 if (!face_a && !face_b) {
@@ -145,12 +148,15 @@ void AabbTree::walk_overlapping(const AabbTree& other, const Aabb& region, Index
                     emit(-1 - a.child[i], -1 - b.child[k]);
                 } else if (face_a) {
                     const Index slot_a = -1 - a.child[i];
-                    face_against(other, b.child[k], m_face_boxes[static_cast<std::size_t>(slot_a)],
-                                 [&](Index slot_b) { emit(slot_a, slot_b); });
+                    face_against(other, b.child[k], lane_a, [&](Index slot_b) { emit(slot_a, slot_b); });
                 } else {
                     const Index slot_b = -1 - b.child[k];
-                    face_against(*this, a.child[i], other.m_face_boxes[static_cast<std::size_t>(slot_b)],
-                                 [&](Index slot_a) { emit(slot_a, slot_b); });
+                    WideBox lane_b;
+                    for (int j = 0; j < 3; ++j) {
+                        lane_b.lo[j] = _mm_set1_ps(b.lo[j][k]);
+                        lane_b.hi[j] = _mm_set1_ps(b.hi[j][k]);
+                    }
+                    face_against(*this, a.child[i], lane_b, [&](Index slot_a) { emit(slot_a, slot_b); });
                 }
             }
         }
