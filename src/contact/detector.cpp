@@ -160,29 +160,37 @@ public:
     /// Candidates first .. first + count − 1 of pair k, answered by results[0 .. count − 1].
     void take(std::size_t k, Index first, Index count, const InsideTest* results)
     {
-        DetectionStats& counts = m_stats.local();
         const PairCandidates& pair = m_candidates[k];
+        unsigned char* inside = m_inside.data() + m_offsets[k] + static_cast<std::size_t>(first);
+        // Counted in locals: the flags are bytes, which may alias anything in memory.
+        Index on_surface = 0, fallbacks = 0, by_neighbour = 0, inside_count = 0;
+        for (Index i = 0; i < count; ++i) {
+            const InsideTest& result = results[i];
+            on_surface += result.on_surface ? 1 : 0;
+            fallbacks += result.deciding_axis == 3 ? 1 : 0;
+            by_neighbour += result.deciding_axis == DECIDED_BY_NEIGHBOUR ? 1 : 0;
+            inside[i] = result.inside ? 1 : 0;
+            inside_count += result.inside ? 1 : 0;
+        }
+        DetectionStats& counts = m_stats.local();
+        counts.candidate_vertices += count;
+        counts.on_surface += on_surface;
+        counts.winding_fallbacks += fallbacks;
+        counts.by_neighbour += by_neighbour;
+        counts.inside += inside_count;
+        if (!m_contact_data)
+            return;
         // The previous inside vertex's nearest face (vertices come in spatial order) seeds the
         // next nearest-point search; reset per block, so the work does not depend on the
         // scheduling (and the answers do not depend on the hints at all).
         Index hint_face = -1;
-        for (Index i = first; i < first + count; ++i) {
-            const InsideTest& result = results[i - first];
-            ++counts.candidate_vertices;
-            counts.on_surface += result.on_surface ? 1 : 0;
-            counts.winding_fallbacks += result.deciding_axis == 3 ? 1 : 0;
-            counts.by_neighbour += result.deciding_axis == DECIDED_BY_NEIGHBOUR ? 1 : 0;
-            if (!result.inside)
+        ContactPoint* slots = m_slots.data() + m_offsets[k] + static_cast<std::size_t>(first);
+        for (Index i = 0; i < count; ++i) {
+            if (!results[i].inside)
                 continue;
-            ++counts.inside;
-            const std::size_t slot = m_offsets[k] + static_cast<std::size_t>(i);
-            m_inside[slot] = 1;
-            if (m_contact_data) {
-                ContactPoint& c = m_slots[slot];
-                c = contact_point(m_surfaces, pair.body, pair.vertices[static_cast<std::size_t>(i)], pair.other,
-                                  result.surface_distance_bound, hint_face);
-                hint_face = c.face;
-            }
+            slots[i] = contact_point(m_surfaces, pair.body, pair.vertices[static_cast<std::size_t>(first + i)],
+                                     pair.other, results[i].surface_distance_bound, hint_face);
+            hint_face = slots[i].face;
         }
     }
 
