@@ -367,7 +367,7 @@ void AabbTree::refit(CRef<Positions> vertices)
             m_vertex_blocks[b].max = Vec3(hi[0], hi[1], hi[2]);
         }
     };
-    constexpr Index PARALLEL_REFIT_FACES = 4096;
+    constexpr Index PARALLEL_REFIT_FACES = 1024;
     if (num_faces() < PARALLEL_REFIT_FACES || m_task_roots.size() < 2) {
         refit_range(data, stride, 0, static_cast<Index>(m_nodes.size()));
         vertex_blocks(0, m_vertex_blocks.size());

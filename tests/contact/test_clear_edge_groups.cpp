@@ -122,10 +122,10 @@ TEST(OverlappingFaces, MatchesBruteForceForTreesOfDifferentDepths)
 
 TEST(OverlappingFaces, MatchesBruteForceWithParallelTasks)
 {
-    // Over 4096 faces: the walk runs as one task per subtree below the top two levels.
+    // Over 1024 faces: the walk runs as one task per subtree below the top two levels.
     const ContactSurface a = deformed_ball(Vec3::Zero(), 1.0, 20, 0.06, "a");
     const ContactSurface b = deformed_ball(Vec3(1.0, 0.05, -0.03), 1.0, 12, 0.05, "b");
-    ASSERT_GE(a.tree.num_faces(), 4096);
+    ASSERT_GE(a.tree.num_faces(), 1024);
     expect_pairs_match_brute_force(a, b, a.tree.bounds().intersection(b.tree.bounds()));
 }
 
