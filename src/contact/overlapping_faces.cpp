@@ -3,6 +3,8 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include <emmintrin.h>
+
 #include <algorithm>
 #include <array>
 
@@ -34,7 +36,8 @@ WideBox wide_box(const Aabb& box)
 }
 
 /// Whether boxes a, b and c have a point in common (closed): on each axis the largest lower
-/// bound is at most the smallest upper bound. Without branches, as the outcome is hard to
+/// bound is at most the smallest upper bound (the same as the three pairwise tests for boxes
+/// that are not empty; overlapping_faces() returns early on an empty region). Without branches, as the outcome is hard to
 /// predict; x and y in one register.
 bool three_boxes_meet(const Aabb& a, const Aabb& b, const Aabb& c)
 {
