@@ -2,14 +2,13 @@
 
 #include <corocontact/contact/broad_phase.hpp>
 
+#include "detection_pass.hpp"
 #include "grouped_inside_tests.hpp"
 
 #include <tbb/blocked_range.h>
-#include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
-#include <cstdint>
 #include <limits>
 #include <tuple>
 
@@ -17,12 +16,8 @@ namespace coro {
 
 namespace {
 
-// Candidate vertices per task: large pairs are split, small ones stay whole.
-constexpr Index VERTEX_BLOCK = 256;
-
-/// make_contact_point with the hints of AabbTree::nearest (same answer, faster).
-ContactPoint contact_point(const std::vector<ContactSurface>& surfaces, Index body, Index vertex, Index other,
-                           double distance_bound, Index hint_face);
+using detail::DetectionPass;
+using detail::VERTEX_BLOCK;
 
 /// The positions of candidates first .. first + count − 1 of `pair`.
 void block_points(const std::vector<ContactSurface>& surfaces, const PairCandidates& pair, Index first, Index count,
@@ -38,189 +33,6 @@ Index count_pairs(const std::vector<PairCandidates>& candidates) { return static
 struct Block {
     std::size_t pair;
     Index begin, end;
-};
-
-/// The points of the slots flagged in `inside`, sorted by (body, vertex, other). `candidates` is
-/// ordered by (body, other) and slot offsets[k] + i belongs to its pair k's candidate i, so a
-/// stable counting sort by vertex over each body's pairs gives that order in O(points + vertices);
-/// a body with few points against many vertices sorts keys instead. `slots` holds each inside
-/// slot's point with its depth and normal; empty: the points carry body, vertex and other only.
-/// The bodies are TBB tasks, each writing its own range of the output.
-std::vector<ContactPoint> sorted_points(const std::vector<ContactSurface>& surfaces,
-                                        const std::vector<PairCandidates>& candidates,
-                                        const std::vector<std::size_t>& offsets, const std::vector<ContactPoint>& slots,
-                                        const std::vector<unsigned char>& inside)
-{
-    // Each body's pairs first .. last − 1 and the start of its points in the output.
-    struct BodyRange {
-        std::size_t first, last, output;
-    };
-    std::vector<BodyRange> bodies;
-    std::size_t total = 0;
-    for (std::size_t first = 0; first < candidates.size();) {
-        std::size_t last = first, count = 0;
-        for (; last < candidates.size() && candidates[last].body == candidates[first].body; ++last)
-            for (std::size_t i = offsets[last]; i < offsets[last + 1]; ++i)
-                count += inside[i];
-        bodies.push_back({first, last, total});
-        total += count;
-        first = last;
-    }
-    std::vector<ContactPoint> points(total);
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, bodies.size(), 1), [&](const tbb::blocked_range<std::size_t>& r) {
-        std::vector<Index> start;
-        std::vector<std::size_t> order;
-        std::vector<std::pair<std::uint64_t, std::size_t>> keys;
-        for (std::size_t j = r.begin(); j < r.end(); ++j) {
-            const auto [first, last, output] = bodies[j];
-            const std::size_t count = (j + 1 < bodies.size() ? bodies[j + 1].output : total) - output;
-            const Index body = candidates[first].body;
-            ContactPoint* out = points.data() + output;
-            // Slot i of this body's pairs: its pair, found among few.
-            const auto emit = [&](std::size_t i) {
-                if (!slots.empty()) {
-                    *out++ = slots[i];
-                    return;
-                }
-                const auto k = static_cast<std::size_t>(
-                    std::upper_bound(offsets.begin() + static_cast<std::ptrdiff_t>(first),
-                                     offsets.begin() + static_cast<std::ptrdiff_t>(last), i) -
-                    offsets.begin() - 1);
-                ContactPoint& c = *out++;
-                c.body = body;
-                c.vertex = candidates[k].vertices[i - offsets[k]];
-                c.other = candidates[k].other;
-            };
-            const auto vertex_of = [&](std::size_t k, std::size_t i) { return candidates[k].vertices[i - offsets[k]]; };
-            const auto vertices = static_cast<std::size_t>(surfaces[static_cast<std::size_t>(body)].vertices.rows());
-            if (8 * count >= vertices) {
-                start.assign(vertices + 1, 0);
-                for (std::size_t k = first; k < last; ++k)
-                    for (std::size_t i = offsets[k]; i < offsets[k + 1]; ++i)
-                        start[static_cast<std::size_t>(vertex_of(k, i)) + 1] += inside[i];
-                for (std::size_t v = 0; v < vertices; ++v)
-                    start[v + 1] += start[v];
-                order.resize(count);
-                for (std::size_t k = first; k < last; ++k) // others ascending: stable within a vertex
-                    for (std::size_t i = offsets[k]; i < offsets[k + 1]; ++i)
-                        if (inside[i])
-                            order[static_cast<std::size_t>(start[static_cast<std::size_t>(vertex_of(k, i))]++)] = i;
-                for (const std::size_t i : order)
-                    emit(i);
-            } else {
-                keys.clear();
-                for (std::size_t k = first; k < last; ++k)
-                    for (std::size_t i = offsets[k]; i < offsets[k + 1]; ++i)
-                        if (inside[i])
-                            keys.emplace_back((static_cast<std::uint64_t>(vertex_of(k, i)) << 32) |
-                                                  static_cast<std::uint32_t>(candidates[k].other),
-                                              i);
-                std::sort(keys.begin(), keys.end());
-                for (const auto& key : keys)
-                    emit(key.second);
-            }
-        }
-    });
-    return points;
-}
-
-/// The part of a detection pass after the broad phase: the answers of the inside tests, taken
-/// block by block (blocks of at most VERTEX_BLOCK candidates of one pair, in any order and from
-/// any thread), become contact points with their depth and normal when asked for, and finish()
-/// returns them sorted.
-class DetectionPass {
-public:
-    DetectionPass(const std::vector<ContactSurface>& surfaces, const std::vector<PairCandidates>& candidates,
-                  bool contact_data)
-        : m_surfaces(surfaces), m_candidates(candidates), m_contact_data(contact_data), m_offsets(candidates.size() + 1, 0)
-    {
-        for (std::size_t k = 0; k < candidates.size(); ++k)
-            m_offsets[k + 1] = m_offsets[k] + candidates[k].vertices.size();
-        if (contact_data) { // the depth searches skip faces by their planes: bring those up to date
-            std::vector<Index> others;
-            for (const PairCandidates& c : candidates)
-                if (!c.vertices.empty())
-                    others.push_back(c.other);
-            std::sort(others.begin(), others.end());
-            others.erase(std::unique(others.begin(), others.end()), others.end());
-            tbb::parallel_for(tbb::blocked_range<std::size_t>(0, others.size(), 1),
-                              [&](const tbb::blocked_range<std::size_t>& r) {
-                                  for (std::size_t i = r.begin(); i < r.end(); ++i) {
-                                      const ContactSurface& s = surfaces[static_cast<std::size_t>(others[i])];
-                                      s.tree.update_planes(s.vertices);
-                                  }
-                              });
-        }
-        // Points with depth and normal are made as the answers come; without, the sorted
-        // output makes them from the candidates.
-        m_slots.resize(contact_data ? m_offsets.back() : 0);
-        m_inside.assign(m_offsets.back(), 0);
-    }
-
-    /// Candidates first .. first + count − 1 of pair k, answered by results[0 .. count − 1].
-    void take(std::size_t k, Index first, Index count, const InsideTest* results)
-    {
-        const PairCandidates& pair = m_candidates[k];
-        unsigned char* inside = m_inside.data() + m_offsets[k] + static_cast<std::size_t>(first);
-        // Counted in locals: the flags are bytes, which may alias anything in memory.
-        Index on_surface = 0, fallbacks = 0, by_neighbour = 0, inside_count = 0;
-        for (Index i = 0; i < count; ++i) {
-            const InsideTest& result = results[i];
-            on_surface += result.on_surface ? 1 : 0;
-            fallbacks += result.deciding_axis == 3 ? 1 : 0;
-            by_neighbour += result.deciding_axis == DECIDED_BY_NEIGHBOUR ? 1 : 0;
-            inside[i] = result.inside ? 1 : 0;
-            inside_count += result.inside ? 1 : 0;
-        }
-        DetectionStats& counts = m_stats.local();
-        counts.candidate_vertices += count;
-        counts.on_surface += on_surface;
-        counts.winding_fallbacks += fallbacks;
-        counts.by_neighbour += by_neighbour;
-        counts.inside += inside_count;
-        if (!m_contact_data)
-            return;
-        // The previous inside vertex's nearest face (vertices come in spatial order) seeds the
-        // next nearest-point search; reset per block, so the work does not depend on the
-        // scheduling (and the answers do not depend on the hints at all).
-        Index hint_face = -1;
-        ContactPoint* slots = m_slots.data() + m_offsets[k] + static_cast<std::size_t>(first);
-        for (Index i = 0; i < count; ++i) {
-            if (!results[i].inside)
-                continue;
-            slots[i] = contact_point(m_surfaces, pair.body, pair.vertices[static_cast<std::size_t>(first + i)],
-                                     pair.other, results[i].surface_distance_bound, hint_face);
-            hint_face = slots[i].face;
-        }
-    }
-
-    bool contact_data() const { return m_contact_data; }
-
-    std::vector<ContactPoint> finish(Index pairs, DetectionStats* stats)
-    {
-        if (stats) {
-            DetectionStats sum;
-            sum.pairs = pairs;
-            for (const DetectionStats& s : m_stats) {
-                sum.candidate_vertices += s.candidate_vertices;
-                sum.inside += s.inside;
-                sum.winding_fallbacks += s.winding_fallbacks;
-                sum.on_surface += s.on_surface;
-                sum.by_neighbour += s.by_neighbour;
-            }
-            *stats = sum;
-        }
-        return sorted_points(m_surfaces, m_candidates, m_offsets, m_slots, m_inside);
-    }
-
-private:
-    const std::vector<ContactSurface>& m_surfaces;
-    const std::vector<PairCandidates>& m_candidates;
-    bool m_contact_data;
-    std::vector<std::size_t> m_offsets; // pair k's candidate i has slot offsets[k] + i
-    std::vector<ContactPoint> m_slots;
-    std::vector<unsigned char> m_inside;
-    tbb::enumerable_thread_specific<DetectionStats> m_stats;
 };
 
 /// A pass whose answers come from `inside(k, first, count, points, results)` for each block of
@@ -301,38 +113,8 @@ std::vector<PairCandidates> contact_candidates(const std::vector<ContactSurface>
 
 ContactPoint make_contact_point(const std::vector<ContactSurface>& surfaces, Index body, Index vertex, Index other)
 {
-    return contact_point(surfaces, body, vertex, other, std::numeric_limits<double>::infinity(), -1);
+    return detail::contact_point(surfaces, body, vertex, other, std::numeric_limits<double>::infinity(), -1);
 }
-
-namespace {
-
-ContactPoint contact_point(const std::vector<ContactSurface>& surfaces, Index body, Index vertex, Index other,
-                           double distance_bound, Index hint_face)
-{
-    const ContactSurface& b = surfaces[static_cast<std::size_t>(other)];
-    const Vec3 p = surfaces[static_cast<std::size_t>(body)].vertices.row(vertex).transpose();
-    const AabbTree::Nearest nearest = b.tree.nearest(b.vertices, p, distance_bound, hint_face);
-    ContactPoint c;
-    c.body = body;
-    c.vertex = vertex;
-    c.other = other;
-    c.depth = nearest.distance;
-    c.face = nearest.face;
-    c.barycentric = nearest.barycentric;
-    if (nearest.face >= 0) {
-        const Vec3 x0 = b.vertices.row(b.faces(nearest.face, 0)).transpose();
-        const Vec3 x1 = b.vertices.row(b.faces(nearest.face, 1)).transpose();
-        const Vec3 x2 = b.vertices.row(b.faces(nearest.face, 2)).transpose();
-        const Vec3 n = (x1 - x0).cross(x2 - x0);
-        if (n.norm() > 0.0)
-            c.normal = n.normalized();
-        else if (nearest.distance > 0.0)
-            c.normal = (nearest.point - p) / nearest.distance;
-    }
-    return c;
-}
-
-} // namespace
 
 std::vector<ContactPoint> detect_contacts(const std::vector<ContactSurface>& surfaces,
                                           const DetectionSettings& settings, DetectionStats* stats)
