@@ -216,6 +216,9 @@ private:
     void walk_overlapping(const AabbTree& other, const Aabb& region, Index a_root, Index b_root,
                           std::vector<std::array<Index, 2>>& slots) const;
     void build_edges(std::size_t vertex_count);
+    /// Subtrees of more faces get no slab: computing one costs a pass over their vertices.
+    static constexpr Index SLAB_MAX_FACES = 1024;
+    void build_slab_vertices(std::size_t vertex_count);
     void refit_range(const double* data, std::ptrdiff_t stride, Index first, Index last);
     void refit_node(const double* data, std::ptrdiff_t stride, Index n);
     /// The planes of a node's children: unit normal u, offset and slack s such that every point
@@ -238,6 +241,8 @@ private:
     std::vector<Index> m_slot_of_face; // inverse of m_order
     mutable std::vector<FacePlanes> m_planes; // per node; a cache filled by update_planes
     mutable bool m_planes_current = false;    // m_planes match the positions of the last refit
+    std::vector<Index> m_slab_vertex_start;   // #nodes + 1; empty range: no slab (too many faces)
+    std::vector<Index> m_slab_vertices;       // distinct vertices of each node's faces
     std::vector<Aabb> m_face_boxes;   // exact box of the face in each slot, refit with the nodes
     std::vector<Index> m_slot_vertices; // 3 per slot: the vertices of the face in that slot
     Aabb m_bounds;
