@@ -479,15 +479,10 @@ AabbTree::Nearest AabbTree::nearest(CRef<Positions> vertices, const Vec3& point,
                                         zero);
             sum = _mm_add_ps(sum, _mm_mul_ps(d, d));
         }
-        int mask = _mm_movemask_ps(_mm_cmple_ps(sum, _mm_set1_ps(threshold))) & ((1 << node.count) - 1);
-        if (mask == 0)
-            continue;
-        _mm_store_ps(d2, sum);
-        // Faces first (lane order: of equally near faces the smallest index wins anyway), then
-        // the child nodes, the nearest on top of the stack.
-        // A face whose plane slab lies beyond the threshold is skipped: |u·p − offset| is
-        // computed in float from p's rounding; the error of that (a few float ulps of
-        // |p|₁ + |offset|, taken 8 times over) is subtracted before the comparison.
+        // A child whose plane slab lies beyond the threshold is skipped too: its key is the larger
+        // of the two lower bounds, so that the stack pops the nearest by the tighter one first.
+        // |u·p − offset| is computed in float from p's rounding; the error of that (a few float
+        // ulps of |p|₁ + |offset|, taken 8 times over) is subtracted.
         if (m_planes_current) {
             const FacePlanes& fp = m_planes[node_index];
             __m128 dot = _mm_sub_ps(_mm_mul_ps(_mm_load_ps(fp.normal[0]), p_f[0]), _mm_load_ps(fp.offset));
@@ -497,11 +492,16 @@ AabbTree::Nearest AabbTree::nearest(CRef<Positions> vertices, const Vec3& point,
             const __m128 error = _mm_add_ps(p_error, _mm_mul_ps(_mm_and_ps(_mm_load_ps(fp.offset), abs_mask),
                                                                 _mm_set1_ps(0x1p-20f)));
             const __m128 lower = _mm_sub_ps(_mm_sub_ps(_mm_and_ps(dot, abs_mask), _mm_load_ps(fp.slack)), error);
-            // (1 − 2⁻¹⁸)·lower ≤ the distance (|u| ≤ 1 + 2⁻²²); skipped when its square is above
-            // the threshold.
+            // (1 − 2⁻¹⁸)·lower ≤ the distance (|u| ≤ 1 + 2⁻²²).
             const __m128 scaled = _mm_mul_ps(_mm_max_ps(lower, zero), _mm_set1_ps(1.0f - 0x1p-18f));
-            mask &= ~_mm_movemask_ps(_mm_cmpgt_ps(_mm_mul_ps(scaled, scaled), _mm_set1_ps(threshold)));
+            sum = _mm_max_ps(sum, _mm_mul_ps(scaled, scaled));
         }
+        const int mask = _mm_movemask_ps(_mm_cmple_ps(sum, _mm_set1_ps(threshold))) & ((1 << node.count) - 1);
+        if (mask == 0)
+            continue;
+        _mm_store_ps(d2, sum);
+        // Faces first (lane order: of equally near faces the smallest index wins anyway), then
+        // the child nodes, the nearest on top of the stack.
         int faces = mask & node.face_mask;
         for (; faces != 0; faces &= faces - 1) {
             const int k = __builtin_ctz(static_cast<unsigned>(faces));
