@@ -4,7 +4,8 @@
 //
 //   bench_embree [--threads N] [benchmark options]      (N defaults to 2)
 //   bench_embree [--threads N] --summary FRAMES
-//       every path (exact, paper, brute force, Embree; with and without depth) on the same
+//       every path (exact, paper, brute force, Embree with depths by its point queries or by
+//       our tree; with and without depth) on the same
 //       frames in one run, interleaved frame by frame; prints refit, Embree update, detection
 //       and frame times (medians), vertex queries/s and the exact/Embree ratios per frame
 //
@@ -350,9 +351,21 @@ double seconds(F&& f)
 void summary(Index resolution, int frames, std::size_t threads)
 {
     const Scene& sc = scene(resolution);
-    enum Path { EXACT, EXACT_INSIDE, EXACT_EACH, PAPER, PAPER_INSIDE, BRUTE_INSIDE, EMBREE, EMBREE_INSIDE, N_PATHS };
+    enum Path {
+        EXACT,
+        EXACT_INSIDE,
+        EXACT_EACH,
+        PAPER,
+        PAPER_INSIDE,
+        BRUTE_INSIDE,
+        EMBREE,
+        EMBREE_TREE_DEPTH,
+        EMBREE_INSIDE,
+        N_PATHS
+    };
     const char* names[N_PATHS] = {"exact",  "exact, inside only",  "exact, inside, no sharing", "paper",
-                                  "paper, inside only", "brute force, inside only", "embree", "embree, inside only"};
+                                  "paper, inside only", "brute force, inside only", "embree",
+                                  "embree, depth by our tree", "embree, inside only"};
     std::vector<PathTimes> t(N_PATHS);
     std::vector<std::vector<ContactSurface>> surfaces(N_PATHS, sc.surfaces[0]);
     detail::EmbreeSceneSet scenes(sc.surfaces[0], detail::EmbreeBuild::REFIT);
@@ -370,7 +383,7 @@ void summary(Index resolution, int frames, std::size_t threads)
                     s[b].update(nodes[b]);
             }));
             DetectionSettings settings;
-            settings.contact_data = p == EXACT || p == PAPER || p == EMBREE;
+            settings.contact_data = p == EXACT || p == PAPER || p == EMBREE || p == EMBREE_TREE_DEPTH;
             settings.share_answers = p != EXACT_EACH;
             settings.mode = p == PAPER || p == PAPER_INSIDE ? DetectionMode::PAPER
                             : p == BRUTE_INSIDE             ? DetectionMode::BRUTE_FORCE
@@ -380,6 +393,16 @@ void summary(Index resolution, int frames, std::size_t threads)
                 embree_update.push_back(seconds([&] { scenes.update(s); }));
                 pt.detect.push_back(seconds([&] {
                     benchmark::DoNotOptimize(detail::detect_contacts_embree(s, scenes, settings, &stats, nullptr));
+                }));
+            } else if (p == EMBREE_TREE_DEPTH) { // Embree's inside tests, our tree's depth searches
+                embree_update.push_back(seconds([&] { scenes.update(s); }));
+                pt.detect.push_back(seconds([&] {
+                    benchmark::DoNotOptimize(detect_contacts(
+                        s,
+                        [&](Index other, const Vec3& x) {
+                            return scenes.inside_test(s[static_cast<std::size_t>(other)], other, x);
+                        },
+                        &stats, true));
                 }));
             } else {
                 pt.detect.push_back(
@@ -400,7 +423,7 @@ void summary(Index resolution, int frames, std::size_t threads)
     std::vector<double> frame(N_PATHS);
     for (int p = 0; p < N_PATHS; ++p) {
         const PathTimes& pt = t[static_cast<std::size_t>(p)];
-        const bool embree = p == EMBREE || p == EMBREE_INSIDE;
+        const bool embree = p == EMBREE || p == EMBREE_TREE_DEPTH || p == EMBREE_INSIDE;
         const double r = median(pt.refit), d = median(pt.detect), u = embree ? update : 0.0;
         frame[static_cast<std::size_t>(p)] = r + u + d;
         const double n = pt.queries / static_cast<double>(pt.detect.size());
@@ -433,14 +456,17 @@ void summary(Index resolution, int frames, std::size_t threads)
         }
     }
     const double refit_emb = median(t[EMBREE].refit), refit_emb_in = median(t[EMBREE_INSIDE].refit);
-    std::printf("refit = copy of the surface vertices + our AABB-tree refit (the Embree path needs it too: mid "
-                "phase, depth); update = Embree's per-frame refit (vertex upload + rtcCommitScene); detect = broad, "
+    std::printf("refit = copy of the surface vertices + our AABB-tree refit (the Embree paths need it too, for "
+                "the mid phase); update = Embree's per-frame refit (vertex upload + rtcCommitScene); detect = broad, "
                 "mid, narrow phase (+ nearest-point depth and normal unless 'inside only'), sorted output; "
                 "Mqueries/s = candidate vertices / detect time; shared = vertices that took a neighbour's "
                 "answer of another vertex of their group, joined by surface edges that meet no face of the other body (DetectionSettings::share_answers; 'no sharing' "
                 "tests each)\n");
-    std::printf("ratio exact/Embree per frame, with depth:   %.3f  (refit+detect vs refit+update+detect)\n",
+    std::printf("ratio exact/Embree per frame, with depth:   %.3f  (refit+detect vs refit+update+detect; Embree's "
+                "depths by its point queries)\n",
                 frame[EXACT] / frame[EMBREE]);
+    std::printf("ratio exact/Embree per frame, with depth, Embree's depths by our tree: %.3f\n",
+                frame[EXACT] / frame[EMBREE_TREE_DEPTH]);
     std::printf("ratio exact/Embree per frame, inside only:  %.3f\n", frame[EXACT_INSIDE] / frame[EMBREE_INSIDE]);
     std::printf("ratio exact/Embree, Embree not charged for our refit: with depth %.3f, inside only %.3f  "
                 "(exact refit+detect vs Embree update+detect)\n",

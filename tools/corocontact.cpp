@@ -237,8 +237,11 @@ int detect_case(const DetectOptions& options)
         const std::vector<coro::ContactPoint> embree =
             coro::detect_contacts_embree(surfaces, scenes, coro::detection_settings(spec.contact));
         const std::vector<coro::Disagreement> disagreements = coro::cross_check(points, embree);
-        std::fprintf(report, "embree cross-check: %zu disagreements (axis-ray %zu inside, Embree %zu inside)\n",
-                     disagreements.size(), points.size(), embree.size());
+        std::fprintf(report,
+                     "embree cross-check: %zu disagreements (axis-ray %zu inside, Embree %zu inside), %d depth "
+                     "disagreements\n",
+                     disagreements.size(), points.size(), embree.size(),
+                     static_cast<int>(coro::depth_disagreements(points, embree)));
         if (options.verbose)
             for (const coro::Disagreement& d : disagreements)
                 std::fprintf(report, "  %s vertex %d in %s: axis-ray says %s, Embree says %s\n",

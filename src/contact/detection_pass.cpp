@@ -101,7 +101,14 @@ ContactPoint contact_point(const std::vector<ContactSurface>& surfaces, Index bo
 {
     const ContactSurface& b = surfaces[static_cast<std::size_t>(other)];
     const Vec3 p = surfaces[static_cast<std::size_t>(body)].vertices.row(vertex).transpose();
-    const AabbTree::Nearest nearest = b.tree.nearest(b.vertices, p, distance_bound, hint_face);
+    return contact_point(surfaces, body, vertex, other, b.tree.nearest(b.vertices, p, distance_bound, hint_face));
+}
+
+ContactPoint contact_point(const std::vector<ContactSurface>& surfaces, Index body, Index vertex, Index other,
+                           const AabbTree::Nearest& nearest)
+{
+    const ContactSurface& b = surfaces[static_cast<std::size_t>(other)];
+    const Vec3 p = surfaces[static_cast<std::size_t>(body)].vertices.row(vertex).transpose();
     ContactPoint c;
     c.body = body;
     c.vertex = vertex;
@@ -123,12 +130,14 @@ ContactPoint contact_point(const std::vector<ContactSurface>& surfaces, Index bo
 }
 
 DetectionPass::DetectionPass(const std::vector<ContactSurface>& surfaces,
-                             const std::vector<PairCandidates>& candidates, bool contact_data)
-    : m_surfaces(surfaces), m_candidates(candidates), m_contact_data(contact_data), m_offsets(candidates.size() + 1, 0)
+                             const std::vector<PairCandidates>& candidates, bool contact_data,
+                             const NearestSearch& nearest)
+    : m_surfaces(surfaces), m_candidates(candidates), m_contact_data(contact_data), m_nearest(nearest),
+      m_offsets(candidates.size() + 1, 0)
 {
     for (std::size_t k = 0; k < candidates.size(); ++k)
         m_offsets[k + 1] = m_offsets[k] + candidates[k].vertices.size();
-    if (contact_data) { // the depth searches skip faces by their planes: bring those up to date
+    if (contact_data && !nearest) { // the depth searches skip faces by their planes: bring those up to date
         std::vector<Index> others;
         for (const PairCandidates& c : candidates)
             if (!c.vertices.empty())
@@ -171,11 +180,22 @@ void DetectionPass::take(std::size_t k, Index first, Index count, const InsideTe
     counts.inside += inside_count;
     if (!m_contact_data)
         return;
+    ContactPoint* slots = m_slots.data() + m_offsets[k] + static_cast<std::size_t>(first);
+    if (m_nearest) { // the caller's search (e.g. Embree's point queries)
+        const Positions& vertices = m_surfaces[static_cast<std::size_t>(pair.body)].vertices;
+        for (Index i = 0; i < count; ++i) {
+            if (!results[i].inside)
+                continue;
+            const Index v = pair.vertices[static_cast<std::size_t>(first + i)];
+            slots[i] = contact_point(m_surfaces, pair.body, v, pair.other,
+                                     m_nearest(pair.other, vertices.row(v).transpose(), results[i].surface_distance_bound));
+        }
+        return;
+    }
     // The previous inside vertex's nearest face (vertices come in spatial order) seeds the
     // next nearest-point search; reset per block, so the work does not depend on the
     // scheduling (and the answers do not depend on the hints at all).
     Index hint_face = -1;
-    ContactPoint* slots = m_slots.data() + m_offsets[k] + static_cast<std::size_t>(first);
     for (Index i = 0; i < count; ++i) {
         if (!results[i].inside)
             continue;

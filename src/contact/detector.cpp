@@ -40,9 +40,9 @@ struct Block {
 template <class Inside>
 std::vector<ContactPoint> run_detection(const std::vector<ContactSurface>& surfaces,
                                         const std::vector<PairCandidates>& candidates, const Inside& inside,
-                                        bool contact_data, DetectionStats* stats)
+                                        bool contact_data, DetectionStats* stats, const NearestSearch& nearest = {})
 {
-    DetectionPass pass(surfaces, candidates, contact_data);
+    DetectionPass pass(surfaces, candidates, contact_data, nearest);
     std::vector<Block> blocks;
     for (std::size_t k = 0; k < candidates.size(); ++k) {
         const auto n = static_cast<Index>(candidates[k].vertices.size());
@@ -157,7 +157,7 @@ std::vector<ContactPoint> detect_contacts(const std::vector<ContactSurface>& sur
 
 std::vector<ContactPoint> detect_contacts(const std::vector<ContactSurface>& surfaces,
                                           const std::function<InsideTest(Index other, const Vec3& point)>& inside,
-                                          DetectionStats* stats, bool contact_data)
+                                          DetectionStats* stats, bool contact_data, const NearestSearch& nearest)
 {
     const std::vector<PairCandidates> candidates = contact_candidates(surfaces, DetectionMode::EXACT);
     return run_detection(
@@ -166,7 +166,7 @@ std::vector<ContactPoint> detect_contacts(const std::vector<ContactSurface>& sur
             for (Index i = 0; i < count; ++i)
                 results[i] = inside(candidates[k].other, points[i]);
         },
-        contact_data, stats);
+        contact_data, stats, nearest);
 }
 
 } // namespace coro

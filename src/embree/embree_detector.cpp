@@ -25,20 +25,24 @@ std::vector<ContactPoint> detect_contacts_embree(const std::vector<ContactSurfac
 {
     CORO_CHECK(static_cast<Index>(surfaces.size()) == scenes.size(), InputError,
                "Embree detection: " << surfaces.size() << " surfaces, but " << scenes.size() << " Embree scenes");
+    // The depths by Embree's point queries too, so that the backend is Embree's throughout.
+    const NearestSearch nearest = [&](Index other, const Vec3& p, double distance_bound) {
+        return scenes.nearest(surfaces[static_cast<std::size_t>(other)], other, p, distance_bound);
+    };
     if (counts == nullptr)
         return detect_contacts(
             surfaces,
             [&](Index other, const Vec3& p) {
                 return scenes.inside_test(surfaces[static_cast<std::size_t>(other)], other, p);
             },
-            stats, settings.contact_data);
+            stats, settings.contact_data, nearest);
     tbb::enumerable_thread_specific<EmbreeQueryCounts> local;
     std::vector<ContactPoint> points = detect_contacts(
         surfaces,
         [&](Index other, const Vec3& p) {
             return scenes.inside_test(surfaces[static_cast<std::size_t>(other)], other, p, &local.local());
         },
-        stats, settings.contact_data);
+        stats, settings.contact_data, nearest);
     *counts = EmbreeQueryCounts{};
     for (const EmbreeQueryCounts& c : local) {
         counts->axis_tests += c.axis_tests;
@@ -128,6 +132,25 @@ std::vector<Disagreement> cross_check(const std::vector<ContactPoint>& axis_ray,
         }
     }
     return out;
+}
+
+Index depth_disagreements(const std::vector<ContactPoint>& axis_ray, const std::vector<ContactPoint>& embree)
+{
+    const auto key = [](const ContactPoint& c) { return std::tie(c.body, c.vertex, c.other); };
+    Index count = 0;
+    std::size_t i = 0, j = 0;
+    while (i < axis_ray.size() && j < embree.size()) {
+        if (key(axis_ray[i]) < key(embree[j]))
+            ++i;
+        else if (key(embree[j]) < key(axis_ray[i]))
+            ++j;
+        else {
+            count += axis_ray[i].face != embree[j].face || axis_ray[i].depth != embree[j].depth ? 1 : 0;
+            ++i;
+            ++j;
+        }
+    }
+    return count;
 }
 
 } // namespace coro

@@ -332,6 +332,7 @@ TEST(CorocontactDetect, SameCsvWithOneAndTwoThreadsAndNoEmbreeDisagreement)
         ASSERT_EQ(outcome.exit_code, 0) << outcome.err;
 #if CORO_WITH_EMBREE
         EXPECT_THAT(outcome.out, HasSubstr("embree cross-check: 0 disagreements"));
+        EXPECT_THAT(outcome.out, HasSubstr(", 0 depth disagreements"));
 #endif
         outputs[threads - 1] = slurp(csv);
     }

@@ -61,13 +61,21 @@ struct DetectionSettings {
 std::vector<ContactPoint> detect_contacts(const std::vector<ContactSurface>& surfaces,
                                           const DetectionSettings& settings, DetectionStats* stats = nullptr);
 
+/// A nearest-point search supplied by the caller: nearest(other, point, distance_bound) must
+/// give what surfaces[other].tree.nearest(vertices, point, distance_bound, −1) gives, face and
+/// distance bit for bit. `distance_bound` is the inside test's surface_distance_bound (+∞:
+/// none). Called concurrently from several threads.
+using NearestSearch = std::function<AabbTree::Nearest(Index other, const Vec3& point, double distance_bound)>;
+
 /// The same pipeline (broad phase, mid phase, parallel vertex loop, depth and normal, sorted
 /// output, stats) with the inside test supplied by the caller, e.g. the Embree backend.
-/// @param[in] inside  inside(other, point): is `point` inside surface `other`; called
-///                    concurrently from several threads
+/// @param[in] inside   inside(other, point): is `point` inside surface `other`; called
+///                     concurrently from several threads
+/// @param[in] nearest  the depth searches (with contact_data); empty: the surfaces' trees
 std::vector<ContactPoint> detect_contacts(const std::vector<ContactSurface>& surfaces,
                                           const std::function<InsideTest(Index other, const Vec3& point)>& inside,
-                                          DetectionStats* stats = nullptr, bool contact_data = true);
+                                          DetectionStats* stats = nullptr, bool contact_data = true,
+                                          const NearestSearch& nearest = {});
 
 /// Mid phase of one ordered pair: the vertices of `body` to test against surface `other`.
 struct PairCandidates {

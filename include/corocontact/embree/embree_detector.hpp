@@ -44,9 +44,11 @@ private:
                                                             const DetectionSettings& settings, DetectionStats* stats);
 };
 
-/// Detection with Embree as the narrow-phase backend (same broad and mid phase, same output;
-/// depth and normal only with settings.contact_data; an inside vertex's depth search starts from
-/// the deciding Embree hit, as the axis-ray test's does from its crossing).
+/// Detection with Embree as the narrow-phase backend (same broad and mid phase, same output).
+/// With settings.contact_data, depth and normal come from Embree point queries (rtcPointQuery)
+/// that measure each face in double precision as AabbTree::nearest does, so they equal the
+/// axis-ray detector's bit for bit; each starts from the deciding Embree hit, as the axis-ray
+/// test's search does from its crossing.
 std::vector<ContactPoint> detect_contacts_embree(const std::vector<ContactSurface>& surfaces,
                                                  const EmbreeScenes& scenes, const DetectionSettings& settings,
                                                  DetectionStats* stats = nullptr);
@@ -61,5 +63,10 @@ struct Disagreement {
 };
 std::vector<Disagreement> cross_check(const std::vector<ContactPoint>& axis_ray,
                                       const std::vector<ContactPoint>& embree);
+
+/// Vertices both found inside whose nearest face or depth differ (Embree's point queries and
+/// the tree's search must give the same, bit for bit). Both lists sorted by (body, vertex,
+/// other), as the detectors return them.
+Index depth_disagreements(const std::vector<ContactPoint>& axis_ray, const std::vector<ContactPoint>& embree);
 
 } // namespace coro

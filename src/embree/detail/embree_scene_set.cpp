@@ -510,6 +510,82 @@ InsideTest EmbreeSceneSet::inside_test(const ContactSurface& surface, Index s, c
     return result;
 }
 
+namespace {
+
+/// The state of one point query: the query point in double, the best face so far.
+struct NearestQuery {
+    const ContactSurface* surface;
+    Vec3 point;
+    double best_d2;  ///< squared distance of the best face, or the initial bound
+    AabbTree::Nearest best;
+    double band;     ///< added to the query radius: Embree's float boxes and query point
+};
+
+/// Query radius for a best distance: widened (relative 2⁻²⁰, then the float band) so that no
+/// face at that distance in double precision, ties included, lies beyond it in Embree's float
+/// coordinates.
+float query_radius(double distance, double band)
+{
+    const double r = distance * (1.0 + 0x1p-20) + band;
+    return r < 1e38 ? static_cast<float>(r) : FLOAT_INF;
+}
+
+/// Embree's point query callback: measures face primID in double precision with the tree's
+/// formula and keeps the smallest (squared distance, face index), as AabbTree::nearest does.
+bool nearest_face(RTCPointQueryFunctionArguments* args)
+{
+    auto& q = *static_cast<NearestQuery*>(args->userPtr);
+    const ContactSurface& s = *q.surface;
+    const auto f = static_cast<Index>(args->primID);
+    const TrianglePoint t = closest_point_on_triangle(q.point, s.vertices.row(s.faces(f, 0)).transpose(),
+                                                      s.vertices.row(s.faces(f, 1)).transpose(),
+                                                      s.vertices.row(s.faces(f, 2)).transpose());
+    const double d2 = (t.point - q.point).squaredNorm();
+    if (!(d2 < q.best_d2 || (d2 == q.best_d2 && f < q.best.face)))
+        return false;
+    q.best_d2 = d2;
+    q.best.face = f;
+    q.best.point = t.point;
+    q.best.barycentric = t.barycentric;
+    args->query->radius = query_radius(std::sqrt(d2), q.band);
+    return true;
+}
+
+} // namespace
+
+AabbTree::Nearest EmbreeSceneSet::nearest(const ContactSurface& surface, Index s, const Vec3& point,
+                                          double distance_bound) const
+{
+    CORO_ASSERT(s >= 0 && s < size());
+    const SurfaceScene& scene = m_impl->scenes[static_cast<std::size_t>(s)];
+    if (scene.num_faces == 0)
+        return {};
+    const std::array<float, 3> local = scene.local(point);
+    CORO_CHECK(std::isfinite(local[0]) && std::isfinite(local[1]) && std::isfinite(local[2]), NumericalError,
+               "surface '" << surface.name << "': nearest-point query from a point not finite in float");
+    NearestQuery q{&surface, point, std::numeric_limits<double>::infinity(), {}, 0.0};
+    // Float noise of the vertices (scale) and of the query point, 64 ulps each as the ray bands.
+    const double lead = std::max({std::abs(local[0]), std::abs(local[1]), std::abs(local[2])});
+    q.band = 64.0 * FLOAT_EPS * (static_cast<double>(scene.scale) + lead);
+    if (distance_bound < std::numeric_limits<double>::infinity()) // inflated as AabbTree::nearest does
+        q.best_d2 = distance_bound * distance_bound * (1.0 + 1e-6) + std::numeric_limits<double>::min();
+    RTCPointQueryContext context;
+    rtcInitPointQueryContext(&context);
+    RTCPointQuery query;
+    query.x = local[0];
+    query.y = local[1];
+    query.z = local[2];
+    query.time = 0.0f;
+    query.radius = query_radius(std::sqrt(q.best_d2), q.band);
+    rtcPointQuery(scene.scene, &query, &context, nearest_face, &q);
+    if (q.best.face < 0) // a bound below the true distance: search again without it
+        return distance_bound < std::numeric_limits<double>::infinity()
+                   ? nearest(surface, s, point, std::numeric_limits<double>::infinity())
+                   : q.best;
+    q.best.distance = std::sqrt(q.best_d2);
+    return q.best;
+}
+
 EmbreeFirstHit EmbreeSceneSet::first_hit(Index s, const Vec3& point, int axis) const
 {
     CORO_ASSERT(s >= 0 && s < size() && axis >= 0 && axis < 3);

@@ -115,6 +115,16 @@ public:
     InsideTest inside_test(const ContactSurface& surface, Index s, const Vec3& point,
                            EmbreeQueryCounts* counts = nullptr) const;
 
+    /// The nearest point of surface `s` to `point` by an Embree point query (rtcPointQuery). The
+    /// callback measures each face Embree hands it in double precision with the tree's formula
+    /// (closest_point_on_triangle) and keeps the smallest (squared distance, face index); the
+    /// query radius is the best distance so far widened by a float band, so that Embree's float
+    /// boxes drop no face that ties. So the answer is AabbTree::nearest's, face and distance bit
+    /// for bit, found by Embree's traversal instead of ours. `surface` must be the one scene
+    /// `s` was built from.
+    /// @param[in] distance_bound  a distance within which the surface lies from `point` (+∞: none)
+    AabbTree::Nearest nearest(const ContactSurface& surface, Index s, const Vec3& point, double distance_bound) const;
+
     /// One plain first-hit ray (no filter) from `point` along +axis: the benchmark's first-hit
     /// ray rate and the test of Embree's normal convention.
     EmbreeFirstHit first_hit(Index s, const Vec3& point, int axis) const;
