@@ -457,7 +457,7 @@ void summary(Index resolution, int frames, std::size_t threads)
     }
     const double refit_emb = median(t[EMBREE].refit), refit_emb_in = median(t[EMBREE_INSIDE].refit);
     std::printf("refit = copy of the surface vertices + our AABB-tree refit (the Embree paths need it too, for "
-                "the mid phase); update = Embree's per-frame refit (vertex upload + rtcCommitScene); detect = broad, "
+                "the mid phase, and 'depth by our tree' for its depths); update = Embree's per-frame refit (vertex upload + rtcCommitScene); detect = broad, "
                 "mid, narrow phase (+ nearest-point depth and normal unless 'inside only'), sorted output; "
                 "Mqueries/s = candidate vertices / detect time; shared = vertices that took a neighbour's "
                 "answer of another vertex of their group, joined by surface edges that meet no face of the other body (DetectionSettings::share_answers; 'no sharing' "

@@ -98,8 +98,11 @@ void Simulation::detect(RunSummary& summary)
 #if CORO_WITH_EMBREE
     if (m_embree) {
         m_embree->scenes.update(m_scene.surfaces);
+        // The summary counts inside/outside disagreements only: no depth queries for it.
+        DetectionSettings settings = detection_settings(m_spec.contact);
+        settings.contact_data = false;
         const std::vector<ContactPoint> embree =
-            detect_contacts_embree(m_scene.surfaces, m_embree->scenes, detection_settings(m_spec.contact));
+            detect_contacts_embree(m_scene.surfaces, m_embree->scenes, settings);
         summary.embree_disagreements += static_cast<Index>(cross_check(m_scene.contacts, embree).size());
     }
 #endif

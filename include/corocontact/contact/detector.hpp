@@ -62,8 +62,8 @@ std::vector<ContactPoint> detect_contacts(const std::vector<ContactSurface>& sur
                                           const DetectionSettings& settings, DetectionStats* stats = nullptr);
 
 /// A nearest-point search supplied by the caller: nearest(other, point, distance_bound) must
-/// give what surfaces[other].tree.nearest(vertices, point, distance_bound, −1) gives, face and
-/// distance bit for bit. `distance_bound` is the inside test's surface_distance_bound (+∞:
+/// give what surfaces[other].tree.nearest(surfaces[other].vertices, point, distance_bound, −1)
+/// gives, face and distance bit for bit. `distance_bound` is the inside test's surface_distance_bound (+∞:
 /// none). Called concurrently from several threads.
 using NearestSearch = std::function<AabbTree::Nearest(Index other, const Vec3& point, double distance_bound)>;
 

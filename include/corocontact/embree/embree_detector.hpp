@@ -47,8 +47,8 @@ private:
 /// Detection with Embree as the narrow-phase backend (same broad and mid phase, same output).
 /// With settings.contact_data, depth and normal come from Embree point queries (rtcPointQuery)
 /// that measure each face in double precision as AabbTree::nearest does, so they equal the
-/// axis-ray detector's bit for bit; each starts from the deciding Embree hit, as the axis-ray
-/// test's search does from its crossing.
+/// axis-ray detector's bit for bit; each query's starting radius is the deciding Embree hit's
+/// distance, as the axis-ray test's search starts from its crossing.
 std::vector<ContactPoint> detect_contacts_embree(const std::vector<ContactSurface>& surfaces,
                                                  const EmbreeScenes& scenes, const DetectionSettings& settings,
                                                  DetectionStats* stats = nullptr);

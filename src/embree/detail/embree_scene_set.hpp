@@ -121,7 +121,8 @@ public:
     /// query radius is the best distance so far widened by a float band, so that Embree's float
     /// boxes drop no face that ties. So the answer is AabbTree::nearest's, face and distance bit
     /// for bit, found by Embree's traversal instead of ours. `surface` must be the one scene
-    /// `s` was built from.
+    /// `s` was built from, and the scene updated to its current vertices (Embree's boxes decide
+    /// which faces are measured: stale ones give a wrong face without notice).
     /// @param[in] distance_bound  a distance within which the surface lies from `point` (+∞: none)
     AabbTree::Nearest nearest(const ContactSurface& surface, Index s, const Vec3& point, double distance_bound) const;
 
