@@ -1,3 +1,4 @@
+#include "brute_force_nearest.hpp"
 #include "contact_scenes.hpp"
 #include "near.hpp"
 
@@ -285,19 +286,9 @@ TEST(AabbTree, NearestIsTheBruteForceMinimumWithSmallestFaceOnTies)
                 p = 0.5 * (box.min + box.max) + 0.1 * (p - 0.5 * (box.min + box.max)); // deep inside
             if (q % 5 == 0)
                 p = (p * 6.0).array().round() / 6.0; // grid planes of the box: ties
-            double best = std::numeric_limits<double>::infinity();
-            Index best_face = -1;
-            for (Index f = 0; f < s.faces.rows(); ++f) {
-                const TrianglePoint t =
-                    closest_point_on_triangle(p, s.vertices.row(s.faces(f, 0)).transpose(),
-                                              s.vertices.row(s.faces(f, 1)).transpose(),
-                                              s.vertices.row(s.faces(f, 2)).transpose());
-                const double d2 = (t.point - p).squaredNorm();
-                if (d2 < best) {
-                    best = d2;
-                    best_face = f;
-                }
-            }
+            const test::BruteForceNearest brute = test::brute_force_nearest(s, p);
+            const double best = brute.squared_distance;
+            const Index best_face = brute.face;
             const AabbTree::Nearest got = s.tree.nearest(s.vertices, p);
             ASSERT_EQ(got.face, best_face) << s.name << " query " << q;
             ASSERT_EQ(got.distance, std::sqrt(best)) << s.name << " query " << q;
@@ -316,18 +307,9 @@ TEST(AabbTree, NearestWithPlanesOfALargeTreeEqualsBruteForce)
     tbb::task_arena(2).execute([&] { s.tree.update_planes(s.vertices); });
     for (int q = 0; q < 60; ++q) {
         const Vec3 p = random_point(Vec3::Constant(q % 2 == 0 ? -0.3 : -1.2), Vec3::Constant(q % 2 == 0 ? 0.3 : 1.2), rng);
-        double best = std::numeric_limits<double>::infinity();
-        Index best_face = -1;
-        for (Index f = 0; f < s.faces.rows(); ++f) {
-            const TrianglePoint t = closest_point_on_triangle(p, s.vertices.row(s.faces(f, 0)).transpose(),
-                                                              s.vertices.row(s.faces(f, 1)).transpose(),
-                                                              s.vertices.row(s.faces(f, 2)).transpose());
-            const double d2 = (t.point - p).squaredNorm();
-            if (d2 < best) {
-                best = d2;
-                best_face = f;
-            }
-        }
+        const test::BruteForceNearest brute = test::brute_force_nearest(s, p);
+        const double best = brute.squared_distance;
+        const Index best_face = brute.face;
         const AabbTree::Nearest got = s.tree.nearest(s.vertices, p);
         ASSERT_EQ(got.face, best_face) << "query " << q;
         ASSERT_EQ(got.distance, std::sqrt(best)) << "query " << q;
@@ -341,14 +323,7 @@ TEST(AabbTree, NearestAndAxisLineFromAFarPoint)
     const Vec3 p(3e19, 1e19, -2e19);
     const AabbTree::Nearest got = s.tree.nearest(s.vertices, p);
     ASSERT_GE(got.face, 0);
-    double best = std::numeric_limits<double>::infinity();
-    for (Index f = 0; f < s.faces.rows(); ++f)
-        best = std::min(best, (closest_point_on_triangle(p, s.vertices.row(s.faces(f, 0)).transpose(),
-                                                         s.vertices.row(s.faces(f, 1)).transpose(),
-                                                         s.vertices.row(s.faces(f, 2)).transpose())
-                                   .point -
-                               p)
-                                  .squaredNorm());
+    const double best = test::brute_force_nearest(s, p).squared_distance;
     EXPECT_EQ(got.distance, std::sqrt(best));
     // The x line through (−3e19, 0.1, 0.2) crosses the sphere: faces are visited.
     int visits = 0;

@@ -1,3 +1,4 @@
+#include "brute_force_nearest.hpp"
 #include "contact_scenes.hpp"
 
 #include <corocontact/contact/axis_ray.hpp>
@@ -21,14 +22,7 @@ const std::vector<Index> NO_FACES;
 /// Distance from p to the surface, scanning every face.
 double brute_force_distance(const ContactSurface& s, const Vec3& p)
 {
-    double best = std::numeric_limits<double>::infinity();
-    for (Index f = 0; f < s.faces.rows(); ++f) {
-        const TrianglePoint q =
-            closest_point_on_triangle(p, s.vertices.row(s.faces(f, 0)).transpose(), s.vertices.row(s.faces(f, 1)).transpose(),
-                                      s.vertices.row(s.faces(f, 2)).transpose());
-        best = std::min(best, (q.point - p).norm());
-    }
-    return best;
+    return std::sqrt(test::brute_force_nearest(s, p).squared_distance);
 }
 
 /// inside_tests_shared() against inside_test() on every point: the same `inside` everywhere,

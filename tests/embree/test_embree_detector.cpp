@@ -6,6 +6,7 @@
 #include <corocontact/core/surface_mesh.hpp>
 #include <corocontact/embree/embree_detector.hpp>
 
+#include "brute_force_nearest.hpp"
 #include "detail/embree_scene_set.hpp"
 
 #include <gmock/gmock.h>
@@ -586,18 +587,9 @@ TEST(EmbreeSceneSet, NearestIsTheBruteForceMinimumWithSmallestFaceOnTies)
                 p = centre + 0.1 * (p - centre); // deep inside
             if (q % 5 == 0)
                 p = (p * 4.0).array().round() / 4.0; // grid planes of the box: ties
-            double best = std::numeric_limits<double>::infinity();
-            Index best_face = -1;
-            for (Index f = 0; f < surface.faces.rows(); ++f) {
-                const TrianglePoint t = closest_point_on_triangle(p, surface.vertices.row(surface.faces(f, 0)).transpose(),
-                                                                  surface.vertices.row(surface.faces(f, 1)).transpose(),
-                                                                  surface.vertices.row(surface.faces(f, 2)).transpose());
-                const double d2 = (t.point - p).squaredNorm();
-                if (d2 < best) {
-                    best = d2;
-                    best_face = f;
-                }
-            }
+            const test::BruteForceNearest brute = test::brute_force_nearest(surface, p);
+            const double best = brute.squared_distance;
+            const Index best_face = brute.face;
             const double bound = q % 4 == 0   ? std::numeric_limits<double>::infinity()
                                  : q % 4 == 1 ? 0.5 * std::sqrt(best) // too small: searched again
                                               : std::sqrt(best) * 1.5;
