@@ -155,7 +155,8 @@ void AabbTree::build(CRef<Positions> vertices, const Tris& faces)
     m_node_slots.clear();
     m_slot_of_face.clear();
     m_edge_start.clear();
-    m_edges.clear();
+    m_edge_vertex.clear();
+    m_edge_slots.clear();
     m_bounds = Aabb{};
     if (faces.rows() == 0)
         return;
@@ -242,12 +243,15 @@ void AabbTree::build_edges(std::size_t vertex_count)
     }
     for (std::size_t v = 0; v < vertex_count; ++v)
         m_edge_start[v + 1] += m_edge_start[v];
-    m_edges.resize(2 * edges.size());
+    m_edge_vertex.resize(2 * edges.size());
+    m_edge_slots.resize(2 * edges.size());
     std::vector<Index> next(m_edge_start.begin(), m_edge_start.end() - 1);
-    for (const auto& e : edges) {
-        m_edges[static_cast<std::size_t>(next[static_cast<std::size_t>(e[0])]++)] = {e[1], {e[2], e[3]}};
-        m_edges[static_cast<std::size_t>(next[static_cast<std::size_t>(e[1])]++)] = {e[0], {e[2], e[3]}};
-    }
+    for (const auto& e : edges)
+        for (int end = 0; end < 2; ++end) {
+            const auto k = static_cast<std::size_t>(next[static_cast<std::size_t>(e[end])]++);
+            m_edge_vertex[k] = e[1 - end];
+            m_edge_slots[k] = {e[2], e[3]};
+        }
 }
 
 void AabbTree::refit_node(const double* data, std::ptrdiff_t stride, Index n)

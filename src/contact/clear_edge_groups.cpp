@@ -13,10 +13,13 @@ namespace {
 constexpr Index NOT_CANDIDATE = -2;
 constexpr Index UNGROUPED = -1;
 
+// Queue places between a vertex whose edges are prefetched and the vertex being expanded.
+constexpr std::size_t PREFETCH_AHEAD = 8;
+
 } // namespace
 
 Index AabbTree::clear_edge_groups(CRef<Positions> vertices, const AabbTree& other, CRef<Positions> other_vertices,
-                                  const std::vector<std::array<Index, 2>>& face_pairs, int column,
+                                  const std::vector<std::array<Index, 2>>& slot_pairs, int column,
                                   const std::vector<Index>& candidates, std::vector<Index>& decider,
                                   std::vector<double>* path) const
 {
@@ -27,9 +30,9 @@ Index AabbTree::clear_edge_groups(CRef<Positions> vertices, const AabbTree& othe
     const auto mine = static_cast<std::size_t>(column), theirs = 1 - mine;
     std::vector<Index> paired_id(m_order.size(), -1);
     std::vector<Index> start(1, 0);
-    start.reserve(face_pairs.size() + 1);
-    for (const auto& pair : face_pairs) {
-        Index& id = paired_id[static_cast<std::size_t>(m_slot_of_face[static_cast<std::size_t>(pair[mine])])];
+    start.reserve(slot_pairs.size() + 1);
+    for (const auto& pair : slot_pairs) {
+        Index& id = paired_id[static_cast<std::size_t>(pair[mine])];
         if (id < 0) {
             id = static_cast<Index>(start.size() - 1);
             start.push_back(0);
@@ -38,13 +41,12 @@ Index AabbTree::clear_edge_groups(CRef<Positions> vertices, const AabbTree& othe
     }
     for (std::size_t j = 1; j < start.size(); ++j)
         start[j] += start[j - 1];
-    std::vector<Index> partners(face_pairs.size());
+    std::vector<Index> partners(slot_pairs.size());
     {
         std::vector<Index> next(start.begin(), start.end() - 1);
-        for (const auto& pair : face_pairs) {
-            const Index id = paired_id[static_cast<std::size_t>(m_slot_of_face[static_cast<std::size_t>(pair[mine])])];
-            partners[static_cast<std::size_t>(next[static_cast<std::size_t>(id)]++)] =
-                other.m_slot_of_face[static_cast<std::size_t>(pair[theirs])];
+        for (const auto& pair : slot_pairs) {
+            const Index id = paired_id[static_cast<std::size_t>(pair[mine])];
+            partners[static_cast<std::size_t>(next[static_cast<std::size_t>(id)]++)] = pair[theirs];
         }
     }
 
@@ -54,9 +56,9 @@ Index AabbTree::clear_edge_groups(CRef<Positions> vertices, const AabbTree& othe
     const std::ptrdiff_t other_stride = other_vertices.outerStride();
     // A face of `other` that meets the edge meets the box of each face holding it: test the
     // partners of the face with fewer (a face with none: the edge is clear).
-    const auto edge_clear = [&](Index u, const VertexEdge& e) {
-        const Index id0 = paired_id[static_cast<std::size_t>(e.slot[0])];
-        const Index id1 = paired_id[static_cast<std::size_t>(e.slot[1])];
+    const auto edge_clear = [&](Index u, Index v, const std::array<Index, 2>& slots) {
+        const Index id0 = paired_id[static_cast<std::size_t>(slots[0])];
+        const Index id1 = paired_id[static_cast<std::size_t>(slots[1])];
         if (id0 < 0 || id1 < 0)
             return true;
         const auto count = [&](Index id) {
@@ -64,7 +66,7 @@ Index AabbTree::clear_edge_groups(CRef<Positions> vertices, const AabbTree& othe
         };
         const Index id = count(id0) <= count(id1) ? id0 : id1;
         const double* p = data + stride * u;
-        const double* q = data + stride * e.vertex;
+        const double* q = data + stride * v;
         const double lo[3] = {std::min(p[0], q[0]), std::min(p[1], q[1]), std::min(p[2], q[2])};
         const double hi[3] = {std::max(p[0], q[0]), std::max(p[1], q[1]), std::max(p[2], q[2])};
         for (Index k = start[static_cast<std::size_t>(id)]; k < start[static_cast<std::size_t>(id) + 1]; ++k) {
@@ -103,23 +105,32 @@ Index AabbTree::clear_edge_groups(CRef<Positions> vertices, const AabbTree& othe
         std::size_t head = 0, tail = 0;
         queue[tail++] = first;
         while (head < tail) {
+            // The edges of consecutive vertices in the queue lie far apart in memory and are
+            // rarely cached at the start of a frame (the other work of a step evicts them), which
+            // made this pass wait on memory: the loads of the edges of a vertex a few places ahead
+            // start now, its m_edge_start entry having been prefetched when it was queued.
+            const Index ahead = queue[std::min(head + PREFETCH_AHEAD, tail - 1)];
+            const auto ahead_edges = static_cast<std::size_t>(m_edge_start[static_cast<std::size_t>(ahead)]);
+            __builtin_prefetch(&m_edge_vertex[ahead_edges]);
+            __builtin_prefetch(&m_edge_slots[ahead_edges]);
             const Index u = queue[head++];
             const Index end = m_edge_start[static_cast<std::size_t>(u) + 1];
             for (Index k = m_edge_start[static_cast<std::size_t>(u)]; k < end; ++k) {
-                const VertexEdge& e = m_edges[static_cast<std::size_t>(k)];
-                Index& s = state[static_cast<std::size_t>(e.vertex)];
-                if (s != UNGROUPED || !edge_clear(u, e))
+                const Index v = m_edge_vertex[static_cast<std::size_t>(k)];
+                Index& s = state[static_cast<std::size_t>(v)];
+                if (s != UNGROUPED || !edge_clear(u, v, m_edge_slots[static_cast<std::size_t>(k)]))
                     continue;
                 s = group;
-                queue[tail++] = e.vertex;
+                queue[tail++] = v;
+                __builtin_prefetch(&m_edge_start[static_cast<std::size_t>(v)]);
                 if (!path)
                     continue;
                 // The sum rounded up by a relative 2⁻⁴⁰, far above the rounding of its terms.
                 const double* x = data + stride * u;
-                const double* y = data + stride * e.vertex;
+                const double* y = data + stride * v;
                 const double length =
                     std::sqrt((x[0] - y[0]) * (x[0] - y[0]) + (x[1] - y[1]) * (x[1] - y[1]) + (x[2] - y[2]) * (x[2] - y[2]));
-                length_to[static_cast<std::size_t>(e.vertex)] =
+                length_to[static_cast<std::size_t>(v)] =
                     (length_to[static_cast<std::size_t>(u)] + length) * (1.0 + 0x1p-40);
             }
         }

@@ -23,9 +23,9 @@ void grouped_inside_tests(const std::vector<ContactSurface>& surfaces, const std
                           const std::function<void(std::size_t pair, const std::vector<InsideTest>& answers)>& use)
 {
     const std::size_t pairs = candidates.size();
-    // The face pairs of each body pair, found once for both directions: candidates holds (a, b)
-    // and (b, a), the region I is the same.
-    std::vector<std::vector<std::array<Index, 2>>> face_pairs(pairs);
+    // The face pairs (as tree slots) of each body pair, found once for both directions:
+    // candidates holds (a, b) and (b, a), the region I is the same.
+    std::vector<std::vector<std::array<Index, 2>>> slot_pairs(pairs);
     std::vector<std::size_t> lower(pairs); // the direction whose body < other, for each k
     std::vector<std::size_t> walks;
     for (std::size_t k = 0; k < pairs; ++k) {
@@ -48,7 +48,7 @@ void grouped_inside_tests(const std::vector<ContactSurface>& surfaces, const std
             const ContactSurface& body = surfaces[static_cast<std::size_t>(pair.body)];
             const ContactSurface& other = surfaces[static_cast<std::size_t>(pair.other)];
             if (other.closed || body.closed)
-                body.tree.overlapping_faces(other.tree, pair.overlap, face_pairs[walks[w]]);
+                body.tree.overlapping_slots(other.tree, pair.overlap, slot_pairs[walks[w]]);
         }
     });
     // Per pair, in one task: the groups, the tests of their first vertices (blocks of them as
@@ -64,7 +64,7 @@ void grouped_inside_tests(const std::vector<ContactSurface>& surfaces, const std
             const ContactSurface& other = surfaces[static_cast<std::size_t>(pair.other)];
             const std::size_t n = pair.vertices.size();
             if (other.closed) {
-                body.tree.clear_edge_groups(body.vertices, other.tree, other.vertices, face_pairs[lower[k]],
+                body.tree.clear_edge_groups(body.vertices, other.tree, other.vertices, slot_pairs[lower[k]],
                                             lower[k] == k ? 0 : 1, pair.vertices, decider,
                                             distance_bounds ? &path : nullptr);
             } else {

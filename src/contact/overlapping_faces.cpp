@@ -64,6 +64,15 @@ int AabbTree::lanes_meeting(Index node, const __m128* lo, const __m128* hi) cons
 
 void AabbTree::overlapping_faces(const AabbTree& other, const Aabb& region, Pairs& pairs) const
 {
+    overlapping_slots(other, region, pairs);
+    for (auto& pair : pairs) {
+        pair[0] = m_order[static_cast<std::size_t>(pair[0])];
+        pair[1] = other.m_order[static_cast<std::size_t>(pair[1])];
+    }
+}
+
+void AabbTree::overlapping_slots(const AabbTree& other, const Aabb& region, Pairs& pairs) const
+{
     pairs.clear();
     if (m_nodes.empty() || other.m_nodes.empty() || region.empty() || !boxes_meet(m_bounds, region) ||
         !boxes_meet(other.m_bounds, region) || !boxes_meet(m_bounds, other.m_bounds))
@@ -88,10 +97,6 @@ void AabbTree::overlapping_faces(const AabbTree& other, const Aabb& region, Pair
                           });
         for (const Pairs& part : parts)
             pairs.insert(pairs.end(), part.begin(), part.end());
-    }
-    for (auto& pair : pairs) {
-        pair[0] = m_order[static_cast<std::size_t>(pair[0])];
-        pair[1] = other.m_order[static_cast<std::size_t>(pair[1])];
     }
 }
 

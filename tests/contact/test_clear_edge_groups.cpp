@@ -70,7 +70,7 @@ Index expect_groups_agree_with_winding_numbers(const ContactSurface& a, const Co
     std::vector<Index> candidates;
     a.tree.vertices_in_box(a.vertices, region, candidates);
     Pairs pairs;
-    a.tree.overlapping_faces(b.tree, region, pairs);
+    a.tree.overlapping_slots(b.tree, region, pairs);
     std::vector<Index> decider;
     std::vector<double> path;
     const Index groups = a.tree.clear_edge_groups(a.vertices, b.tree, b.vertices, pairs, 0, candidates, decider, &path);
@@ -172,7 +172,7 @@ TEST(ClearEdgeGroups, VerticesOnTheOtherSurfaceStandAlone)
     a.tree.vertices_in_box(a.vertices, region, candidates);
     ASSERT_FALSE(candidates.empty());
     Pairs pairs;
-    a.tree.overlapping_faces(b.tree, region, pairs);
+    a.tree.overlapping_slots(b.tree, region, pairs);
     std::vector<Index> decider;
     std::vector<double> path;
     a.tree.clear_edge_groups(a.vertices, b.tree, b.vertices, pairs, 0, candidates, decider, &path);
@@ -188,7 +188,7 @@ TEST(ClearEdgeGroups, VerticesOnTheOtherSurfaceStandAlone)
     }
     EXPECT_EQ(on_surface, 2); // (1, 0.5, 0.5) and (1, 0.5, 1)
 
-    // The other way round, with the faces of the pairs in the second column.
+    // The other way round, with the slots of the pairs in the second column.
     Pairs reversed = pairs;
     for (auto& pair : reversed)
         std::swap(pair[0], pair[1]);

@@ -127,18 +127,23 @@ public:
     /// face of this surface inside `region` is in a pair with it.
     /// @param[out] pairs  the pairs, each once, in an order that depends only on the two trees
     void overlapping_faces(const AabbTree& other, const Aabb& region, std::vector<std::array<Index, 2>>& pairs) const;
+    /// overlapping_faces() with each face as its slot, its place in its tree's leaf order (what
+    /// clear_edge_groups() takes: it saves two lookups per face, far apart in memory).
+    /// @param[out] slot_pairs  (slot in this tree, slot in `other`), each pair once
+    void overlapping_slots(const AabbTree& other, const Aabb& region,
+                           std::vector<std::array<Index, 2>>& slot_pairs) const;
 
     /// Splits candidate vertices of this surface into groups joined by edges of this surface that
     /// meet no face of `other`: the vertices of a group are all inside or all outside `other`'s
-    /// closed surface. An edge is clear when one of its faces is in no pair of `face_pairs`, or
+    /// closed surface. An edge is clear when one of its faces is in no pair of `slot_pairs`, or
     /// when each face of `other` paired with it whose box meets the edge's is shown to miss the
     /// edge by signs beyond their rounding (as segment_clear). A vertex on `other`'s surface
     /// meets a face with every edge, so it is a group of its own.
     /// @param[in] vertices        this surface's positions (last build or refit)
     /// @param[in] other_vertices  `other`'s positions (last build or refit)
-    /// @param[in] face_pairs      overlapping_faces() of the two trees over a region holding
-    ///                            every candidate; (this face, other face) when `column` is 0,
-    ///                            (other face, this face) when it is 1
+    /// @param[in] slot_pairs      overlapping_slots() of the two trees over a region holding
+    ///                            every candidate; (this slot, other slot) when `column` is 0,
+    ///                            (other slot, this slot) when it is 1
     /// @param[in] candidates      distinct vertices of this surface in that region
     /// @param[out] decider        per candidate, the index into `candidates` of its group's first
     ///                            candidate (itself for that one)
@@ -147,7 +152,7 @@ public:
     ///                            positions; null: not computed
     /// @return the number of groups
     Index clear_edge_groups(CRef<Positions> vertices, const AabbTree& other, CRef<Positions> other_vertices,
-                            const std::vector<std::array<Index, 2>>& face_pairs, int column,
+                            const std::vector<std::array<Index, 2>>& slot_pairs, int column,
                             const std::vector<Index>& candidates, std::vector<Index>& decider,
                             std::vector<double>* path) const;
 
@@ -248,14 +253,13 @@ private:
     Aabb m_bounds;
     std::vector<Index> m_vertex_order;  // used vertices, first appearance in leaf order
     std::vector<Aabb> m_vertex_blocks;  // box of each VERTEX_BLOCK consecutive m_vertex_order entries
-    /// One edge seen from a vertex: the other end and the slots of two faces holding the edge
-    /// (the same slot twice on a boundary edge).
-    struct VertexEdge {
-        Index vertex;
-        Index slot[2];
-    };
-    std::vector<Index> m_edge_start;   // #V + 1: the edges of vertex v are m_edges[start[v], start[v + 1])
-    std::vector<VertexEdge> m_edges;   // each edge twice, once from either end
+    // Each edge twice, once from either end: the edges of vertex v are k in
+    // [m_edge_start[v], m_edge_start[v + 1]), to vertex m_edge_vertex[k], held by the faces in
+    // slots m_edge_slots[k] (the same slot twice on a boundary edge). Apart, as the grouping
+    // pass reads the slots of few of the edges it scans.
+    std::vector<Index> m_edge_start;                // #V + 1
+    std::vector<Index> m_edge_vertex;               // 2 × #edges
+    std::vector<std::array<Index, 2>> m_edge_slots; // 2 × #edges
     Tris m_faces;
 };
 
