@@ -103,8 +103,7 @@ void BM_Refit(benchmark::State& state)
     int frame = 0;
     for (auto _ : state) {
         frame = (frame + 1) % FRAMES;
-        for (std::size_t b = 0; b < surfaces.size(); ++b)
-            surfaces[b].update(s.frames[static_cast<std::size_t>(frame)][b]);
+        update_surfaces(surfaces, s.frames[static_cast<std::size_t>(frame)]);
         benchmark::DoNotOptimize(surfaces[0].tree.bounds());
     }
     set_scene_counters(state, s);
@@ -123,8 +122,7 @@ void detect(benchmark::State& state, DetectionMode mode, bool with_refit, bool c
         frame = (frame + 1) % FRAMES;
         const std::vector<ContactSurface>* current = &s.surfaces[static_cast<std::size_t>(frame)];
         if (with_refit) {
-            for (std::size_t b = 0; b < surfaces.size(); ++b)
-                surfaces[b].update(s.frames[static_cast<std::size_t>(frame)][b]);
+            update_surfaces(surfaces, s.frames[static_cast<std::size_t>(frame)]);
             current = &surfaces;
         }
         DetectionStats stats;
@@ -161,8 +159,7 @@ struct ProfileTotals {
 
 __attribute__((noinline)) void profile_refit(std::vector<ContactSurface>& surfaces, const std::vector<Positions>& nodes)
 {
-    for (std::size_t b = 0; b < surfaces.size(); ++b)
-        surfaces[b].update(nodes[b]);
+    update_surfaces(surfaces, nodes);
 }
 
 __attribute__((noinline)) std::vector<ContactPoint> profile_detect(const std::vector<ContactSurface>& surfaces,

@@ -114,8 +114,7 @@ const char* build_name(detail::EmbreeBuild b)
 void next_frame(const Scene& sc, int& frame, std::vector<ContactSurface>& surfaces)
 {
     frame = (frame + 1) % FRAMES;
-    for (std::size_t b = 0; b < surfaces.size(); ++b)
-        surfaces[b].update(sc.frames[static_cast<std::size_t>(frame)][b]);
+    update_surfaces(surfaces, sc.frames[static_cast<std::size_t>(frame)]);
 }
 
 void label(benchmark::State& state, const Scene& sc, const char* what)
@@ -378,10 +377,7 @@ void summary(Index resolution, int frames, std::size_t threads)
                 continue;
             std::vector<ContactSurface>& s = surfaces[static_cast<std::size_t>(p)];
             PathTimes& pt = t[static_cast<std::size_t>(p)];
-            pt.refit.push_back(seconds([&] {
-                for (std::size_t b = 0; b < s.size(); ++b)
-                    s[b].update(nodes[b]);
-            }));
+            pt.refit.push_back(seconds([&] { update_surfaces(s, nodes); }));
             DetectionSettings settings;
             settings.contact_data = p == EXACT || p == PAPER || p == EMBREE || p == EMBREE_TREE_DEPTH;
             settings.share_answers = p != EXACT_EACH;
@@ -439,8 +435,7 @@ void summary(Index resolution, int frames, std::size_t threads)
         std::vector<ContactSurface> s = sc.surfaces[0];
         for (int f = 0; f < frames; ++f) {
             const auto& nodes = sc.frames[static_cast<std::size_t>((f + 1) % FRAMES)];
-            for (std::size_t b = 0; b < s.size(); ++b)
-                s[b].update(nodes[b]);
+            update_surfaces(s, nodes);
             rays.clear();
             for (const PairCandidates& pair : contact_candidates(s, DetectionMode::EXACT))
                 for (const Index v : pair.vertices)

@@ -87,4 +87,23 @@ void ContactSurface::update(CRef<Positions> body_positions)
     tree.refit(vertices);
 }
 
+void update_surfaces(std::vector<ContactSurface>& surfaces, const std::vector<Eigen::Map<const Positions>>& positions)
+{
+    CORO_ASSERT(positions.size() <= surfaces.size());
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, positions.size(), 1),
+                      [&](const tbb::blocked_range<std::size_t>& r) {
+                          for (std::size_t b = r.begin(); b < r.end(); ++b)
+                              surfaces[b].update(positions[b]);
+                      });
+}
+
+void update_surfaces(std::vector<ContactSurface>& surfaces, const std::vector<Positions>& positions)
+{
+    std::vector<Eigen::Map<const Positions>> maps;
+    maps.reserve(positions.size());
+    for (const Positions& p : positions)
+        maps.emplace_back(p.data(), p.rows(), 3);
+    update_surfaces(surfaces, maps);
+}
+
 } // namespace coro

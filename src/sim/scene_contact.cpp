@@ -44,8 +44,11 @@ std::vector<ContactSurface> make_scene_surfaces(const Scene& scene)
 
 void update_contact_surfaces(const std::vector<Body>& bodies, std::vector<ContactSurface>& surfaces)
 {
-    for (std::size_t b = 0; b < bodies.size(); ++b)
-        surfaces[b].update(as_positions(bodies[b].positions()));
+    std::vector<Eigen::Map<const Positions>> positions;
+    positions.reserve(bodies.size());
+    for (const Body& body : bodies)
+        positions.push_back(as_positions(body.positions()));
+    update_surfaces(surfaces, positions);
 }
 
 DetectionSettings detection_settings(const ContactSettings& contact)

@@ -43,4 +43,13 @@ private:
     void update_vertices(CRef<Positions> body_positions); // embedded surfaces
 };
 
+/// update() of the first positions.size() surfaces, surface b from positions[b], the surfaces
+/// as parallel tasks (a large one's refit is split into tasks of its own as well). With few
+/// bodies, updating them one after another leaves cores idle, as a body's refit splits well
+/// only from some thousands of faces. The result does not depend on the thread count.
+/// @param[in] positions  per surface, the #N×3 body node positions update() takes
+void update_surfaces(std::vector<ContactSurface>& surfaces, const std::vector<Eigen::Map<const Positions>>& positions);
+/// The same with positions held as matrices.
+void update_surfaces(std::vector<ContactSurface>& surfaces, const std::vector<Positions>& positions);
+
 } // namespace coro

@@ -7,6 +7,7 @@
 #include <embree3/rtcore.h>
 
 #include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
 #include <tbb/parallel_reduce.h>
 
 #include <algorithm>
@@ -425,8 +426,10 @@ void EmbreeSceneSet::update(const std::vector<ContactSurface>& surfaces)
     CORO_CHECK(surfaces.size() == m_impl->scenes.size(), InputError,
                "Embree scenes: " << surfaces.size() << " surfaces given, " << m_impl->scenes.size()
                                  << " scenes were built");
-    for (std::size_t i = 0; i < surfaces.size(); ++i)
-        m_impl->update_surface(m_impl->scenes[i], surfaces[i]);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, surfaces.size(), 1), [&](const tbb::blocked_range<std::size_t>& r) {
+        for (std::size_t i = r.begin(); i < r.end(); ++i)
+            m_impl->update_surface(m_impl->scenes[i], surfaces[i]);
+    });
 }
 
 AxisOutcome EmbreeSceneSet::axis_test(Index s, const Vec3& point, int axis, EmbreeQueryCounts* counts) const

@@ -1,0 +1,78 @@
+#include <corocontact/contact/contact_surface.hpp>
+#include <corocontact/contact/detector.hpp>
+#include <corocontact/core/primitives.hpp>
+#include <corocontact/core/surface_mesh.hpp>
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <vector>
+
+namespace coro {
+namespace {
+
+/// Node positions of `mesh` moved by a smooth field that differs per body.
+Positions moved(const TetMesh& mesh, double phase)
+{
+    Positions x = mesh.rest_positions;
+    for (Index i = 0; i < x.rows(); ++i) {
+        x(i, 0) += 0.08 * std::sin(3.0 * x(i, 1) + phase);
+        x(i, 1) += 0.05 * std::cos(2.0 * x(i, 2) - phase);
+        x(i, 2) -= 0.1 * x(i, 0) * x(i, 0);
+    }
+    return x;
+}
+
+void expect_same_surfaces(const std::vector<ContactSurface>& a, const std::vector<ContactSurface>& b)
+{
+    ASSERT_EQ(a.size(), b.size());
+    for (std::size_t s = 0; s < a.size(); ++s) {
+        EXPECT_EQ(a[s].vertices, b[s].vertices) << "surface " << s; // bitwise
+        EXPECT_EQ(a[s].tree.bounds().min, b[s].tree.bounds().min) << "surface " << s;
+        EXPECT_EQ(a[s].tree.bounds().max, b[s].tree.bounds().max) << "surface " << s;
+    }
+}
+
+TEST(UpdateSurfaces, EqualsUpdatingEachInTurnAndLeavesTheRestAlone)
+{
+    // Three bodies (one with more faces than a refit splits into tasks) and a fourth surface,
+    // an obstacle, that is not given positions.
+    std::vector<TetMesh> meshes{make_sphere(Vec3(0, 0, 0), 1.0, 16), make_sphere(Vec3(1.2, 0.1, 0), 0.8, 6),
+                                make_sphere(Vec3(0.2, 1.1, 0.3), 0.7, 4), make_sphere(Vec3(0, 0, -1.5), 0.9, 5)};
+    std::vector<ContactSurface> start;
+    for (std::size_t b = 0; b < meshes.size(); ++b)
+        start.push_back(ContactSurface::from_body("body" + std::to_string(b), meshes[b].rest_positions,
+                                                  boundary_faces(meshes[b])));
+    ASSERT_GT(start[0].faces.rows(), 2048);
+    std::vector<Positions> positions;
+    for (std::size_t b = 0; b < 3; ++b)
+        positions.push_back(moved(meshes[b], static_cast<double>(b)));
+
+    std::vector<ContactSurface> in_turn = start, together = start, through_maps = start;
+    for (std::size_t b = 0; b < positions.size(); ++b)
+        in_turn[b].update(positions[b]);
+    update_surfaces(together, positions);
+    std::vector<Eigen::Map<const Positions>> maps;
+    for (const Positions& p : positions)
+        maps.emplace_back(p.data(), p.rows(), 3);
+    update_surfaces(through_maps, maps);
+
+    expect_same_surfaces(together, in_turn);
+    expect_same_surfaces(through_maps, in_turn);
+    EXPECT_EQ(together[3].vertices, start[3].vertices);
+    EXPECT_NE(together[0].vertices, start[0].vertices);
+    // The trees answer as the trees refit one by one.
+    const std::vector<ContactPoint> expected = detect_contacts(in_turn, DetectionSettings{});
+    const std::vector<ContactPoint> got = detect_contacts(together, DetectionSettings{});
+    ASSERT_FALSE(expected.empty());
+    ASSERT_EQ(got.size(), expected.size());
+    for (std::size_t i = 0; i < got.size(); ++i) {
+        EXPECT_EQ(got[i].body, expected[i].body);
+        EXPECT_EQ(got[i].vertex, expected[i].vertex);
+        EXPECT_EQ(got[i].other, expected[i].other);
+        EXPECT_EQ(got[i].depth, expected[i].depth);
+    }
+}
+
+} // namespace
+} // namespace coro
