@@ -4,6 +4,9 @@
 #include <tbb/parallel_for.h>
 
 #include <emmintrin.h>
+#if defined(__AVX2__)
+#include <immintrin.h>
+#endif
 
 #include <algorithm>
 #include <array>
@@ -35,6 +38,18 @@ WideBox wide_box(const Aabb& box)
     return w;
 }
 
+/// Lane k's float box of a node, each bound broadcast.
+template <class Node>
+WideBox lane_box(const Node& node, int k)
+{
+    WideBox w;
+    for (int j = 0; j < 3; ++j) {
+        w.lo[j] = _mm_set1_ps(node.lo[j][k]);
+        w.hi[j] = _mm_set1_ps(node.hi[j][k]);
+    }
+    return w;
+}
+
 /// Whether boxes a, b and c have a point in common (closed): on each axis the largest lower
 /// bound is at most the smallest upper bound (the same as the three pairwise tests for boxes
 /// that are not empty; overlapping_faces() returns early on an empty region). Without branches, as the outcome is hard to
@@ -48,6 +63,40 @@ bool three_boxes_meet(const Aabb& a, const Aabb& b, const Aabb& c)
     const bool z = std::max(std::max(a.min[2], b.min[2]), c.min[2]) <= std::min(std::min(a.max[2], b.max[2]), c.max[2]);
     return (_mm_movemask_pd(_mm_cmple_pd(lo, hi)) == 3) & z;
 }
+
+#if defined(__AVX2__)
+/// Bit 4i + k set: lane i of `a` and lane k of `b` have float boxes that meet (closed), all
+/// sixteen pairs at once: lanes i = 0, 1 in one register and i = 2, 3 in another, each
+/// against the four lanes of `b`.
+template <class Node>
+int lane_pairs_meeting(const Node& a, const Node& b)
+{
+    const __m256i first = _mm256_setr_epi32(0, 0, 0, 0, 1, 1, 1, 1);
+    const __m256i second = _mm256_setr_epi32(2, 2, 2, 2, 3, 3, 3, 3);
+    __m256 meet01 = _mm256_castsi256_ps(_mm256_set1_epi32(-1)), meet23 = meet01;
+    for (int j = 0; j < 3; ++j) {
+        const __m256 a_lo = _mm256_castps128_ps256(_mm_load_ps(a.lo[j]));
+        const __m256 a_hi = _mm256_castps128_ps256(_mm_load_ps(a.hi[j]));
+        const __m256 b_lo = _mm256_broadcast_ps(reinterpret_cast<const __m128*>(b.lo[j]));
+        const __m256 b_hi = _mm256_broadcast_ps(reinterpret_cast<const __m128*>(b.hi[j]));
+        meet01 = _mm256_and_ps(meet01, _mm256_and_ps(_mm256_cmp_ps(_mm256_permutevar8x32_ps(a_lo, first), b_hi, _CMP_LE_OQ),
+                                                     _mm256_cmp_ps(_mm256_permutevar8x32_ps(a_hi, first), b_lo, _CMP_GE_OQ)));
+        meet23 = _mm256_and_ps(meet23, _mm256_and_ps(_mm256_cmp_ps(_mm256_permutevar8x32_ps(a_lo, second), b_hi, _CMP_LE_OQ),
+                                                     _mm256_cmp_ps(_mm256_permutevar8x32_ps(a_hi, second), b_lo, _CMP_GE_OQ)));
+    }
+    return _mm256_movemask_ps(meet01) | (_mm256_movemask_ps(meet23) << 8);
+}
+
+/// Bit 4i + k of the result: bit i of `a_lanes` and bit k of `b_lanes` both set.
+int lane_pair_mask(int a_lanes, int b_lanes)
+{
+    int mask = 0;
+    for (int i = 0; i < 4; ++i)
+        if ((a_lanes >> i) & 1)
+            mask |= b_lanes << (4 * i);
+    return mask;
+}
+#endif
 
 } // namespace
 
@@ -141,35 +190,36 @@ void AabbTree::walk_overlapping(const AabbTree& other, const Aabb& region, Index
         const int mask_b = other.lanes_meeting(nb, wide_region.lo, wide_region.hi);
         if (mask_b == 0)
             continue;
-        for (int ma = lanes_meeting(na, wide_region.lo, wide_region.hi); ma != 0; ma &= ma - 1) {
-            const int i = __builtin_ctz(static_cast<unsigned>(ma));
-            WideBox lane_a;
-            for (int j = 0; j < 3; ++j) {
-                lane_a.lo[j] = _mm_set1_ps(a.lo[j][i]);
-                lane_a.hi[j] = _mm_set1_ps(a.hi[j][i]);
-            }
+        const int mask_a = lanes_meeting(na, wide_region.lo, wide_region.hi);
+        // Lane pairs (i, k) whose boxes meet each other and the region, i ascending, then k.
+        const auto take = [&](int i, int k) {
             const bool face_a = (a.face_mask >> i) & 1;
-            for (int mb = other.lanes_meeting(nb, lane_a.lo, lane_a.hi) & mask_b; mb != 0; mb &= mb - 1) {
-                const int k = __builtin_ctz(static_cast<unsigned>(mb));
-                const bool face_b = (b.face_mask >> k) & 1;
-                if (!face_a && !face_b) {
-                    stack[top++] = {a.child[i], b.child[k]};
-                } else if (face_a && face_b) {
-                    emit(-1 - a.child[i], -1 - b.child[k]);
-                } else if (face_a) {
-                    const Index slot_a = -1 - a.child[i];
-                    face_against(other, b.child[k], lane_a, [&](Index slot_b) { emit(slot_a, slot_b); });
-                } else {
-                    const Index slot_b = -1 - b.child[k];
-                    WideBox lane_b;
-                    for (int j = 0; j < 3; ++j) {
-                        lane_b.lo[j] = _mm_set1_ps(b.lo[j][k]);
-                        lane_b.hi[j] = _mm_set1_ps(b.hi[j][k]);
-                    }
-                    face_against(*this, a.child[i], lane_b, [&](Index slot_a) { emit(slot_a, slot_b); });
-                }
+            const bool face_b = (b.face_mask >> k) & 1;
+            if (!face_a && !face_b) {
+                stack[top++] = {a.child[i], b.child[k]};
+            } else if (face_a && face_b) {
+                emit(-1 - a.child[i], -1 - b.child[k]);
+            } else if (face_a) {
+                const Index slot_a = -1 - a.child[i];
+                face_against(other, b.child[k], lane_box(a, i), [&](Index slot_b) { emit(slot_a, slot_b); });
+            } else {
+                const Index slot_b = -1 - b.child[k];
+                face_against(*this, a.child[i], lane_box(b, k), [&](Index slot_a) { emit(slot_a, slot_b); });
             }
+        };
+#if defined(__AVX2__)
+        for (int m = lane_pairs_meeting(a, b) & lane_pair_mask(mask_a, mask_b); m != 0; m &= m - 1) {
+            const int bit = __builtin_ctz(static_cast<unsigned>(m));
+            take(bit >> 2, bit & 3);
         }
+#else
+        for (int ma = mask_a; ma != 0; ma &= ma - 1) {
+            const int i = __builtin_ctz(static_cast<unsigned>(ma));
+            const WideBox lane_a = lane_box(a, i);
+            for (int mb = other.lanes_meeting(nb, lane_a.lo, lane_a.hi) & mask_b; mb != 0; mb &= mb - 1)
+                take(i, __builtin_ctz(static_cast<unsigned>(mb)));
+        }
+#endif
     }
 }
 
