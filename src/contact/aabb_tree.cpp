@@ -153,7 +153,6 @@ void AabbTree::build(CRef<Positions> vertices, const Tris& faces)
     m_slab_vertex_start.clear();
     m_slab_vertices.clear();
     m_node_slots.clear();
-    m_slot_of_face.clear();
     m_edge_start.clear();
     m_edge_vertex.clear();
     m_edge_slots.clear();
@@ -210,9 +209,6 @@ void AabbTree::build(CRef<Positions> vertices, const Tris& faces)
     for (std::size_t i = 0; i < m_order.size(); ++i)
         for (int c = 0; c < 3; ++c)
             m_slot_vertices[3 * i + static_cast<std::size_t>(c)] = faces(m_order[i], c);
-    m_slot_of_face.resize(m_order.size());
-    for (std::size_t i = 0; i < m_order.size(); ++i)
-        m_slot_of_face[static_cast<std::size_t>(m_order[i])] = static_cast<Index>(i);
     build_edges(static_cast<std::size_t>(vertices.rows()));
     build_slab_vertices(static_cast<std::size_t>(vertices.rows()));
     refit(vertices);

@@ -111,8 +111,8 @@ Index AabbTree::clear_edge_groups(CRef<Positions> vertices, const AabbTree& othe
             // start now, its m_edge_start entry having been prefetched when it was queued.
             const Index ahead = queue[std::min(head + PREFETCH_AHEAD, tail - 1)];
             const auto ahead_edges = static_cast<std::size_t>(m_edge_start[static_cast<std::size_t>(ahead)]);
-            __builtin_prefetch(&m_edge_vertex[ahead_edges]);
-            __builtin_prefetch(&m_edge_slots[ahead_edges]);
+            __builtin_prefetch(m_edge_vertex.data() + ahead_edges); // may be one past the end
+            __builtin_prefetch(m_edge_slots.data() + ahead_edges);
             const Index u = queue[head++];
             const Index end = m_edge_start[static_cast<std::size_t>(u) + 1];
             for (Index k = m_edge_start[static_cast<std::size_t>(u)]; k < end; ++k) {

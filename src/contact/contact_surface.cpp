@@ -89,7 +89,8 @@ void ContactSurface::update(CRef<Positions> body_positions)
 
 void update_surfaces(std::vector<ContactSurface>& surfaces, const std::vector<Eigen::Map<const Positions>>& positions)
 {
-    CORO_ASSERT(positions.size() <= surfaces.size());
+    CORO_CHECK(positions.size() <= surfaces.size(), InputError,
+               "update_surfaces: " << positions.size() << " position sets for " << surfaces.size() << " surfaces");
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, positions.size(), 1),
                       [&](const tbb::blocked_range<std::size_t>& r) {
                           for (std::size_t b = r.begin(); b < r.end(); ++b)

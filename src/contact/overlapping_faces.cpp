@@ -52,7 +52,7 @@ WideBox lane_box(const Node& node, int k)
 
 /// Whether boxes a, b and c have a point in common (closed): on each axis the largest lower
 /// bound is at most the smallest upper bound (the same as the three pairwise tests for boxes
-/// that are not empty; overlapping_faces() returns early on an empty region). Without branches, as the outcome is hard to
+/// that are not empty; overlapping_slots() returns early on an empty region). Without branches, as the outcome is hard to
 /// predict; x and y in one register.
 bool three_boxes_meet(const Aabb& a, const Aabb& b, const Aabb& c)
 {
@@ -79,10 +79,12 @@ int lane_pairs_meeting(const Node& a, const Node& b)
         const __m256 a_hi = _mm256_castps128_ps256(_mm_load_ps(a.hi[j]));
         const __m256 b_lo = _mm256_broadcast_ps(reinterpret_cast<const __m128*>(b.lo[j]));
         const __m256 b_hi = _mm256_broadcast_ps(reinterpret_cast<const __m128*>(b.hi[j]));
-        meet01 = _mm256_and_ps(meet01, _mm256_and_ps(_mm256_cmp_ps(_mm256_permutevar8x32_ps(a_lo, first), b_hi, _CMP_LE_OQ),
-                                                     _mm256_cmp_ps(_mm256_permutevar8x32_ps(a_hi, first), b_lo, _CMP_GE_OQ)));
-        meet23 = _mm256_and_ps(meet23, _mm256_and_ps(_mm256_cmp_ps(_mm256_permutevar8x32_ps(a_lo, second), b_hi, _CMP_LE_OQ),
-                                                     _mm256_cmp_ps(_mm256_permutevar8x32_ps(a_hi, second), b_lo, _CMP_GE_OQ)));
+        const auto meet = [&](const __m256i& lanes) {
+            return _mm256_and_ps(_mm256_cmp_ps(_mm256_permutevar8x32_ps(a_lo, lanes), b_hi, _CMP_LE_OQ),
+                                 _mm256_cmp_ps(_mm256_permutevar8x32_ps(a_hi, lanes), b_lo, _CMP_GE_OQ));
+        };
+        meet01 = _mm256_and_ps(meet01, meet(first));
+        meet23 = _mm256_and_ps(meet23, meet(second));
     }
     return _mm256_movemask_ps(meet01) | (_mm256_movemask_ps(meet23) << 8);
 }

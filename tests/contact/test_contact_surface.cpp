@@ -1,11 +1,13 @@
 #include <corocontact/contact/contact_surface.hpp>
 #include <corocontact/contact/detector.hpp>
+#include <corocontact/core/error.hpp>
 #include <corocontact/core/primitives.hpp>
 #include <corocontact/core/surface_mesh.hpp>
 
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <string>
 #include <vector>
 
 namespace coro {
@@ -35,15 +37,15 @@ void expect_same_surfaces(const std::vector<ContactSurface>& a, const std::vecto
 
 TEST(UpdateSurfaces, EqualsUpdatingEachInTurnAndLeavesTheRestAlone)
 {
-    // Three bodies (one with more faces than a refit splits into tasks) and a fourth surface,
-    // an obstacle, that is not given positions.
-    std::vector<TetMesh> meshes{make_sphere(Vec3(0, 0, 0), 1.0, 16), make_sphere(Vec3(1.2, 0.1, 0), 0.8, 6),
+    // Three bodies (one large enough that its vertex copy and its refit are split into tasks of
+    // their own) and a fourth surface, an obstacle, that is not given positions.
+    std::vector<TetMesh> meshes{make_sphere(Vec3(0, 0, 0), 1.0, 20), make_sphere(Vec3(1.2, 0.1, 0), 0.8, 6),
                                 make_sphere(Vec3(0.2, 1.1, 0.3), 0.7, 4), make_sphere(Vec3(0, 0, -1.5), 0.9, 5)};
     std::vector<ContactSurface> start;
     for (std::size_t b = 0; b < meshes.size(); ++b)
         start.push_back(ContactSurface::from_body("body" + std::to_string(b), meshes[b].rest_positions,
                                                   boundary_faces(meshes[b])));
-    ASSERT_GT(start[0].faces.rows(), 2048);
+    ASSERT_GT(start[0].vertices.rows(), 2048); // ContactSurface::update copies in tasks from 2,048
     std::vector<Positions> positions;
     for (std::size_t b = 0; b < 3; ++b)
         positions.push_back(moved(meshes[b], static_cast<double>(b)));
@@ -60,10 +62,14 @@ TEST(UpdateSurfaces, EqualsUpdatingEachInTurnAndLeavesTheRestAlone)
     expect_same_surfaces(together, in_turn);
     expect_same_surfaces(through_maps, in_turn);
     EXPECT_EQ(together[3].vertices, start[3].vertices);
+    EXPECT_EQ(through_maps[3].vertices, start[3].vertices);
     EXPECT_NE(together[0].vertices, start[0].vertices);
     // The trees answer as the trees refit one by one.
     const std::vector<ContactPoint> expected = detect_contacts(in_turn, DetectionSettings{});
     const std::vector<ContactPoint> got = detect_contacts(together, DetectionSettings{});
+    // More position sets than surfaces is an input error, not a write past the end.
+    std::vector<ContactSurface> two(start.begin(), start.begin() + 2);
+    EXPECT_THROW(update_surfaces(two, positions), InputError);
     ASSERT_FALSE(expected.empty());
     ASSERT_EQ(got.size(), expected.size());
     for (std::size_t i = 0; i < got.size(); ++i) {

@@ -560,6 +560,21 @@ TEST(EmbreeScenes, UpdateRejectsOtherSurfaces)
     EXPECT_THAT([&] { scenes.update(other); }, ::testing::ThrowsMessage<InputError>(HasSubstr("'cube'")));
 }
 
+TEST(EmbreeScenes, UpdateThrowsTheFirstFailingSurfacesError)
+{
+    // The scenes commit as parallel tasks: of two bad surfaces, the first is reported, every time.
+    std::vector<ContactSurface> surfaces;
+    for (int k = 0; k < 4; ++k)
+        surfaces.push_back(surface_of("cube" + std::to_string(k), box_body(Vec3(2.0 * k, 0, 0), Vec3(2.0 * k + 1, 1, 1), 2)));
+    for (int attempt = 0; attempt < 10; ++attempt) {
+        std::vector<ContactSurface> moved = surfaces;
+        EmbreeScenes scenes(moved); // built again each time: a failed update leaves it unusable
+        moved[1].vertices(3, 1) = std::numeric_limits<double>::quiet_NaN();
+        moved[3].vertices(0, 2) = std::numeric_limits<double>::infinity();
+        EXPECT_THAT([&] { scenes.update(moved); }, ::testing::ThrowsMessage<NumericalError>(HasSubstr("'cube1'")));
+    }
+}
+
 TEST(EmbreeSceneSet, NearestIsTheBruteForceMinimumWithSmallestFaceOnTies)
 {
     // Embree's point query with our callback must give the minimum over all faces of (computed

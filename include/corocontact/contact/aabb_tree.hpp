@@ -217,7 +217,7 @@ private:
     Index build_node(const std::vector<Vec3>& centroids, Index begin, Index end, int depth);
     /// The lanes of `node` whose float box meets the float box [lo, hi] (one register per bound).
     int lanes_meeting(Index node, const __m128* lo, const __m128* hi) const;
-    /// overlapping_faces() below node a_root of this tree and b_root of `other`, as slot pairs.
+    /// overlapping_slots() below node a_root of this tree and b_root of `other`.
     void walk_overlapping(const AabbTree& other, const Aabb& region, Index a_root, Index b_root,
                           std::vector<std::array<Index, 2>>& slots) const;
     void build_edges(std::size_t vertex_count);
@@ -243,7 +243,6 @@ private:
     std::vector<Index> m_node_slots;  // 2 per node: the range of slots (faces) of its subtree
     std::vector<Index> m_task_roots;  // parallel refit: roots of the subtrees refit as tasks
     std::vector<Index> m_order;       // face of each slot, in leaf order
-    std::vector<Index> m_slot_of_face; // inverse of m_order
     mutable std::vector<FacePlanes> m_planes; // per node; a cache filled by update_planes
     mutable bool m_planes_current = false;    // m_planes match the positions of the last refit
     std::vector<Index> m_slab_vertex_start;   // #nodes + 1; empty range: no slab (too many faces)

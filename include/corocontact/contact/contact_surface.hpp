@@ -47,7 +47,8 @@ private:
 /// as parallel tasks (a large one's refit is split into tasks of its own as well). With few
 /// bodies, updating them one after another leaves cores idle, as a body's refit splits well
 /// only from some thousands of faces. The result does not depend on the thread count.
-/// @param[in] positions  per surface, the #N×3 body node positions update() takes
+/// @param[in] positions  per surface, the #N×3 body node positions update() takes; at most
+///                       surfaces.size() of them (InputError otherwise)
 void update_surfaces(std::vector<ContactSurface>& surfaces, const std::vector<Eigen::Map<const Positions>>& positions);
 /// The same with positions held as matrices.
 void update_surfaces(std::vector<ContactSurface>& surfaces, const std::vector<Positions>& positions);

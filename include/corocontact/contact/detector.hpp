@@ -42,7 +42,7 @@ struct DetectionSettings {
     bool contact_data = true;
     /// Exact mode: candidate vertices share answers. The candidates of a pair are grouped by
     /// edges of their surface that meet no face of the other surface (AabbTree::
-    /// clear_edge_groups over the face pairs of AabbTree::overlapping_faces); the first vertex
+    /// clear_edge_groups over the face pairs of AabbTree::overlapping_slots); the first vertex
     /// of each group is tested and the others take its answer, the same as their own tests
     /// would give. Where the other surface is not closed, every candidate is tested.
     /// False: every candidate vertex is tested (for measurements and cross-checks).

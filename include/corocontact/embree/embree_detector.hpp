@@ -22,7 +22,10 @@ public:
     EmbreeScenes(const EmbreeScenes&) = delete;
     EmbreeScenes& operator=(const EmbreeScenes&) = delete;
 
-    /// Uploads the surfaces' current vertex positions and recommits (refit).
+    /// Uploads the surfaces' current vertex positions and recommits (refit), the scenes as
+    /// parallel tasks. After it throws, build the scenes again before using them.
+    /// @throws InputError if the surfaces' count or sizes changed, NumericalError for non-finite
+    ///         coordinates or an Embree error (the first failing surface's)
     void update(const std::vector<ContactSurface>& surfaces);
 
     /// The axis-ray test of one point against surface `s` with Embree rays: all hits along the

@@ -14,9 +14,12 @@
 #include <array>
 #include <cmath>
 #include <cstddef>
+#include <exception>
 #include <limits>
+#include <map>
 #include <mutex>
 #include <string>
+#include <thread>
 #include <type_traits>
 #include <utility>
 
@@ -265,7 +268,9 @@ struct EmbreeSceneSet::Impl {
     EmbreeBuild build = EmbreeBuild::REFIT;
     std::vector<SurfaceScene> scenes;
     std::mutex error_mutex;
-    std::string error_message; ///< first message since the last check, from the callback
+    /// Per thread (Embree keeps error codes per thread, and scenes commit in parallel tasks):
+    /// the first message since that thread's last check, from the callback.
+    std::map<std::thread::id, std::string> error_messages;
 
     Impl() = default;
     Impl(const Impl&) = delete;
@@ -288,8 +293,9 @@ struct EmbreeSceneSet::Impl {
     {
         auto* impl = static_cast<Impl*>(user);
         const std::lock_guard<std::mutex> lock(impl->error_mutex);
-        if (impl->error_message.empty())
-            impl->error_message = std::string(error_name(code)) + ": " + (message != nullptr ? message : "");
+        std::string& recorded = impl->error_messages[std::this_thread::get_id()];
+        if (recorded.empty())
+            recorded = std::string(error_name(code)) + ": " + (message != nullptr ? message : "");
     }
 
     /// rtcGetDeviceError after an Embree call; throws NumericalError with Embree's text.
@@ -301,7 +307,11 @@ struct EmbreeSceneSet::Impl {
         std::string message;
         {
             const std::lock_guard<std::mutex> lock(error_mutex);
-            std::swap(message, error_message);
+            const auto recorded = error_messages.find(std::this_thread::get_id());
+            if (recorded != error_messages.end()) {
+                message = std::move(recorded->second);
+                error_messages.erase(recorded);
+            }
         }
         if (message.empty())
             message = error_name(code);
@@ -426,10 +436,21 @@ void EmbreeSceneSet::update(const std::vector<ContactSurface>& surfaces)
     CORO_CHECK(surfaces.size() == m_impl->scenes.size(), InputError,
                "Embree scenes: " << surfaces.size() << " surfaces given, " << m_impl->scenes.size()
                                  << " scenes were built");
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, surfaces.size(), 1), [&](const tbb::blocked_range<std::size_t>& r) {
-        for (std::size_t i = r.begin(); i < r.end(); ++i)
-            m_impl->update_surface(m_impl->scenes[i], surfaces[i]);
-    });
+    // The scenes commit as parallel tasks; of several failures, the first surface's is thrown.
+    std::vector<std::exception_ptr> failures(surfaces.size());
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, surfaces.size(), 1),
+                      [&](const tbb::blocked_range<std::size_t>& r) {
+                          for (std::size_t i = r.begin(); i < r.end(); ++i) {
+                              try {
+                                  m_impl->update_surface(m_impl->scenes[i], surfaces[i]);
+                              } catch (...) {
+                                  failures[i] = std::current_exception();
+                              }
+                          }
+                      });
+    for (const std::exception_ptr& failure : failures)
+        if (failure)
+            std::rethrow_exception(failure);
 }
 
 AxisOutcome EmbreeSceneSet::axis_test(Index s, const Vec3& point, int axis, EmbreeQueryCounts* counts) const

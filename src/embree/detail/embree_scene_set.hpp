@@ -96,9 +96,11 @@ public:
     /// Number of scenes (= surfaces at construction).
     Index size() const;
 
-    /// Uploads the current vertex positions of every surface and recommits its scene.
+    /// Uploads the current vertex positions of every surface and recommits its scene, the
+    /// scenes as parallel tasks. After it throws, some scenes may hold the new positions
+    /// uncommitted: build the set again before using it.
     /// @throws InputError if the surfaces' count or sizes changed, NumericalError for an
-    ///         Embree error or non-finite coordinates
+    ///         Embree error or non-finite coordinates (the first failing surface's)
     void update(const std::vector<ContactSurface>& surfaces);
 
     /// See EmbreeScenes::axis_test. `counts` (optional) is incremented.
