@@ -100,6 +100,27 @@ int lane_pair_mask(int a_lanes, int b_lanes)
 }
 #endif
 
+/// f(i, k) for each lane i of `a` in `a_lanes` and lane k of `b` in `b_lanes` whose float boxes
+/// meet, i ascending, then k. `b_lanes_meeting(box)`: the lanes of `b` whose boxes meet `box`.
+template <class Node, class BLanesMeeting, class F>
+void for_each_lane_pair(const Node& a, const Node& b, int a_lanes, int b_lanes,
+                        [[maybe_unused]] const BLanesMeeting& b_lanes_meeting, const F& f)
+{
+#if defined(__AVX2__)
+    for (int m = lane_pairs_meeting(a, b) & lane_pair_mask(a_lanes, b_lanes); m != 0; m &= m - 1) {
+        const int bit = __builtin_ctz(static_cast<unsigned>(m));
+        f(bit >> 2, bit & 3);
+    }
+#else
+    for (int ma = a_lanes; ma != 0; ma &= ma - 1) {
+        const int i = __builtin_ctz(static_cast<unsigned>(ma));
+        const WideBox lane_a = lane_box(a, i);
+        for (int mb = b_lanes_meeting(lane_a) & b_lanes; mb != 0; mb &= mb - 1)
+            f(i, __builtin_ctz(static_cast<unsigned>(mb)));
+    }
+#endif
+}
+
 } // namespace
 
 /// The lanes of node `node` whose float box meets `box` (closed).
@@ -128,27 +149,66 @@ void AabbTree::overlapping_slots(const AabbTree& other, const Aabb& region, Pair
     if (m_nodes.empty() || other.m_nodes.empty() || region.empty() || !boxes_meet(m_bounds, region) ||
         !boxes_meet(other.m_bounds, region) || !boxes_meet(m_bounds, other.m_bounds))
         return;
-    // Large trees: the subtrees below this tree's top two levels (when they hold every face) as
-    // tasks against the whole of `other`, their pairs joined in task order.
-    Index under_task_roots = 0;
-    for (const Index root : m_task_roots)
-        under_task_roots += m_node_slots[2 * static_cast<std::size_t>(root) + 1] - m_node_slots[2 * static_cast<std::size_t>(root)];
-    // From about a thousand faces (the 10k-tet spheres' 1,728) the split pays for its tasks.
-    constexpr Index PARALLEL_WALK_FACES = 1024;
-    if (num_faces() < PARALLEL_WALK_FACES || m_task_roots.size() < 2 || under_task_roots != num_faces()) {
+    constexpr Index PARALLEL_WALK_FACES = 1024; // from about the 10k-tet spheres' 1,728 faces
+    if (num_faces() < PARALLEL_WALK_FACES) {
         walk_overlapping(other, region, 0, 0, pairs);
-    } else {
-        std::vector<Pairs> parts(m_task_roots.size());
-        for (Pairs& part : parts) // about what a task emits in deep overlap: few regrowths
-            part.reserve(256);
-        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, parts.size(), 1),
-                          [&](const tbb::blocked_range<std::size_t>& r) {
-                              for (std::size_t t = r.begin(); t < r.end(); ++t)
-                                  walk_overlapping(other, region, m_task_roots[t], 0, parts[t]);
-                          });
-        for (const Pairs& part : parts)
-            pairs.insert(pairs.end(), part.begin(), part.end());
+        return;
     }
+    // Large trees: the walk's node pairs a few levels down both trees, found level by level, as
+    // tasks (each level of both trees taken once: tasks that each started from the root of
+    // `other` walked its top levels again, and were slower), their pairs joined in task order.
+    const std::vector<std::array<Index, 2>> tasks = walk_tasks(other, region);
+    std::vector<Pairs> parts(tasks.size());
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, tasks.size(), 1), [&](const tbb::blocked_range<std::size_t>& r) {
+        for (std::size_t t = r.begin(); t < r.end(); ++t)
+            walk_overlapping(other, region, tasks[t][0], tasks[t][1], parts[t]);
+    });
+    std::size_t total = 0;
+    for (const Pairs& part : parts)
+        total += part.size();
+    pairs.reserve(total);
+    for (const Pairs& part : parts)
+        pairs.insert(pairs.end(), part.begin(), part.end());
+}
+
+std::vector<std::array<Index, 2>> AabbTree::walk_tasks(const AabbTree& other, const Aabb& region) const
+{
+    // Enough tasks for two threads to share the walk evenly, however the overlap is spread.
+    constexpr std::size_t MIN_TASKS = 16;
+    constexpr int MAX_LEVELS = 4;
+    const WideBox wide_region = wide_box(region);
+    std::vector<std::array<Index, 2>> level{{0, 0}}, next;
+    for (int depth = 0; depth < MAX_LEVELS && level.size() < MIN_TASKS; ++depth) {
+        next.clear();
+        bool split = false;
+        for (const auto& [na, nb] : level) {
+            const WideNode& a = m_nodes[static_cast<std::size_t>(na)];
+            const WideNode& b = other.m_nodes[static_cast<std::size_t>(nb)];
+            const int mask_b = other.lanes_meeting(nb, wide_region.lo, wide_region.hi);
+            const int mask_a = lanes_meeting(na, wide_region.lo, wide_region.hi);
+            if (mask_a == 0 || mask_b == 0)
+                continue;
+            // A pair with a face lane among its children stays whole (the walk takes faces).
+            const std::size_t before = next.size();
+            bool faces = false;
+            for_each_lane_pair(
+                a, b, mask_a, mask_b, [&](const WideBox& box) { return other.lanes_meeting(nb, box.lo, box.hi); },
+                [&](int i, int k) {
+                    faces = faces || ((a.face_mask >> i) & 1) || ((b.face_mask >> k) & 1);
+                    next.push_back({a.child[i], b.child[k]});
+                });
+            if (faces) {
+                next.resize(before);
+                next.push_back({na, nb});
+            } else {
+                split = true;
+            }
+        }
+        level.swap(next);
+        if (!split)
+            break;
+    }
+    return level;
 }
 
 void AabbTree::walk_overlapping(const AabbTree& other, const Aabb& region, Index a_root, Index b_root,
@@ -209,19 +269,8 @@ void AabbTree::walk_overlapping(const AabbTree& other, const Aabb& region, Index
                 face_against(*this, a.child[i], lane_box(b, k), [&](Index slot_a) { emit(slot_a, slot_b); });
             }
         };
-#if defined(__AVX2__)
-        for (int m = lane_pairs_meeting(a, b) & lane_pair_mask(mask_a, mask_b); m != 0; m &= m - 1) {
-            const int bit = __builtin_ctz(static_cast<unsigned>(m));
-            take(bit >> 2, bit & 3);
-        }
-#else
-        for (int ma = mask_a; ma != 0; ma &= ma - 1) {
-            const int i = __builtin_ctz(static_cast<unsigned>(ma));
-            const WideBox lane_a = lane_box(a, i);
-            for (int mb = other.lanes_meeting(nb, lane_a.lo, lane_a.hi) & mask_b; mb != 0; mb &= mb - 1)
-                take(i, __builtin_ctz(static_cast<unsigned>(mb)));
-        }
-#endif
+        for_each_lane_pair(
+            a, b, mask_a, mask_b, [&](const WideBox& box) { return other.lanes_meeting(nb, box.lo, box.hi); }, take);
     }
 }
 

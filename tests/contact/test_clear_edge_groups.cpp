@@ -122,11 +122,23 @@ TEST(OverlappingFaces, MatchesBruteForceForTreesOfDifferentDepths)
 
 TEST(OverlappingFaces, MatchesBruteForceWithParallelTasks)
 {
-    // Over 1024 faces: the walk runs as one task per subtree below the top two levels.
+    // Over 1024 faces: the walk runs as tasks from node pairs a few levels down both trees.
     const ContactSurface a = deformed_ball(Vec3::Zero(), 1.0, 20, 0.06, "a");
     const ContactSurface b = deformed_ball(Vec3(1.0, 0.05, -0.03), 1.0, 12, 0.05, "b");
     ASSERT_GE(a.tree.num_faces(), 1024);
     expect_pairs_match_brute_force(a, b, a.tree.bounds().intersection(b.tree.bounds()));
+}
+
+TEST(OverlappingFaces, MatchesBruteForceWithParallelTasksAgainstAShallowTree)
+{
+    // The box's tree has faces one level below its root: the node pairs that reach them stay
+    // whole tasks.
+    const ContactSurface ball = deformed_ball(Vec3::Zero(), 1.0, 20, 0.06, "ball");
+    const ContactSurface box = surface_of(make_box(Vec3(0.5, -0.6, -0.4), Vec3(1.3, 0.5, 0.6), {1, 1, 1}), "box");
+    ASSERT_GE(ball.tree.num_faces(), 1024);
+    const Aabb overlap = ball.tree.bounds().intersection(box.tree.bounds());
+    expect_pairs_match_brute_force(ball, box, overlap);
+    expect_pairs_match_brute_force(box, ball, overlap);
 }
 
 TEST(OverlappingFaces, EmptyWhenTheBoxesMiss)

@@ -123,8 +123,8 @@ public:
 
     /// Pairs (face of this tree, face of `other`) whose boxes overlap each other (closed) and
     /// both meet `region`: a walk of the two trees together, four children against four (large
-    /// trees: this tree's top subtrees as parallel tasks). Every face of `other` that meets a
-    /// face of this surface inside `region` is in a pair with it.
+    /// trees: from node pairs a few levels down both trees, as parallel tasks). Every face of
+    /// `other` that meets a face of this surface inside `region` is in a pair with it.
     /// @param[out] pairs  the pairs, each once, in an order that depends only on the two trees
     void overlapping_faces(const AabbTree& other, const Aabb& region, std::vector<std::array<Index, 2>>& pairs) const;
     /// overlapping_faces() with each face as its slot, its place in its tree's leaf order (what
@@ -217,6 +217,9 @@ private:
     Index build_node(const std::vector<Vec3>& centroids, Index begin, Index end, int depth);
     /// The lanes of `node` whose float box meets the float box [lo, hi] (one register per bound).
     int lanes_meeting(Index node, const __m128* lo, const __m128* hi) const;
+    /// The node pairs (this tree, `other`) from which overlapping_slots() walks in parallel:
+    /// together they lead to every pair of faces, each once, in an order fixed by the trees.
+    std::vector<std::array<Index, 2>> walk_tasks(const AabbTree& other, const Aabb& region) const;
     /// overlapping_slots() below node a_root of this tree and b_root of `other`.
     void walk_overlapping(const AabbTree& other, const Aabb& region, Index a_root, Index b_root,
                           std::vector<std::array<Index, 2>>& slots) const;
