@@ -103,7 +103,7 @@ int lane_pair_mask(int a_lanes, int b_lanes)
 /// f(i, k) for each lane i of `a` in `a_lanes` and lane k of `b` in `b_lanes` whose float boxes
 /// meet, i ascending, then k. `b_lanes_meeting(box)`: the lanes of `b` whose boxes meet `box`.
 template <class Node, class BLanesMeeting, class F>
-void for_each_lane_pair(const Node& a, const Node& b, int a_lanes, int b_lanes,
+void for_each_lane_pair(const Node& a, [[maybe_unused]] const Node& b, int a_lanes, int b_lanes,
                         [[maybe_unused]] const BLanesMeeting& b_lanes_meeting, const F& f)
 {
 #if defined(__AVX2__)
