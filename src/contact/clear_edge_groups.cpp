@@ -69,6 +69,13 @@ Index AabbTree::clear_edge_groups(CRef<Positions> vertices, const AabbTree& othe
         const double* q = data + stride * v;
         const double lo[3] = {std::min(p[0], q[0]), std::min(p[1], q[1]), std::min(p[2], q[2])};
         const double hi[3] = {std::max(p[0], q[0]), std::max(p[1], q[1]), std::max(p[2], q[2])};
+        // The faces whose boxes meet the edge's are tested TRIANGLE_LANES at a time.
+        const double* corner[3][detail::TRIANGLE_LANES];
+        int taken = 0;
+        const auto batch_clear = [&] {
+            const int clear = detail::segment_misses_triangles(p, q, corner[0], corner[1], corner[2], taken);
+            return clear == (1 << taken) - 1;
+        };
         for (Index k = start[static_cast<std::size_t>(id)]; k < start[static_cast<std::size_t>(id) + 1]; ++k) {
             const std::size_t g = static_cast<std::size_t>(partners[static_cast<std::size_t>(k)]);
             const Aabb& fb = other.m_face_boxes[g];
@@ -76,11 +83,15 @@ Index AabbTree::clear_edge_groups(CRef<Positions> vertices, const AabbTree& othe
                 fb.max[1] < lo[1] || fb.max[2] < lo[2])
                 continue;
             const Index* fv = &other.m_slot_vertices[3 * g];
-            if (!detail::segment_misses_triangle(p, q, other_data + other_stride * fv[0],
-                                                 other_data + other_stride * fv[1], other_data + other_stride * fv[2]))
-                return false;
+            for (int c = 0; c < 3; ++c)
+                corner[c][taken] = other_data + other_stride * fv[c];
+            if (++taken == detail::TRIANGLE_LANES) {
+                if (!batch_clear())
+                    return false;
+                taken = 0;
+            }
         }
-        return true;
+        return taken == 0 || batch_clear();
     };
 
     // Breadth-first from each candidate not yet grouped, in the order given; the search works on

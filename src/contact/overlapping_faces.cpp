@@ -50,6 +50,17 @@ WideBox lane_box(const Node& node, int k)
     return w;
 }
 
+/// The part of `box` in `region` (empty on an axis where they do not meet: low above high).
+WideBox clipped(const WideBox& box, const WideBox& region)
+{
+    WideBox w;
+    for (int j = 0; j < 3; ++j) {
+        w.lo[j] = _mm_max_ps(box.lo[j], region.lo[j]);
+        w.hi[j] = _mm_min_ps(box.hi[j], region.hi[j]);
+    }
+    return w;
+}
+
 /// Whether boxes a, b and c have a point in common (closed): on each axis the largest lower
 /// bound is at most the smallest upper bound (the same as the three pairwise tests for boxes
 /// that are not empty; overlapping_slots() returns early on an empty region). Without branches, as the outcome is hard to
@@ -65,54 +76,53 @@ bool three_boxes_meet(const Aabb& a, const Aabb& b, const Aabb& c)
 }
 
 #if defined(__AVX2__)
-/// Bit 4i + k set: lane i of `a` and lane k of `b` have float boxes that meet (closed), all
-/// sixteen pairs at once: lanes i = 0, 1 in one register and i = 2, 3 in another, each
-/// against the four lanes of `b`.
+/// Bit 4i + k set: lane i of `a` and lane k of `b` have float boxes that meet each other and
+/// `region` (closed), all sixteen pairs at once. Three boxes meet when, on each axis, the largest
+/// lower bound is at most the smallest upper bound: the lanes are clipped to the region, then
+/// compared, lanes i = 0, 1 in one register and i = 2, 3 in another, each against the four lanes
+/// of `b`. Unused lanes hold empty boxes (+∞, −∞), which meet nothing.
 template <class Node>
-int lane_pairs_meeting(const Node& a, const Node& b)
+int lane_pairs_meeting(const Node& a, const Node& b, const WideBox& region)
 {
     const __m256i first = _mm256_setr_epi32(0, 0, 0, 0, 1, 1, 1, 1);
     const __m256i second = _mm256_setr_epi32(2, 2, 2, 2, 3, 3, 3, 3);
     __m256 meet01 = _mm256_castsi256_ps(_mm256_set1_epi32(-1)), meet23 = meet01;
     for (int j = 0; j < 3; ++j) {
-        const __m256 a_lo = _mm256_castps128_ps256(_mm_load_ps(a.lo[j]));
-        const __m256 a_hi = _mm256_castps128_ps256(_mm_load_ps(a.hi[j]));
-        const __m256 b_lo = _mm256_broadcast_ps(reinterpret_cast<const __m128*>(b.lo[j]));
-        const __m256 b_hi = _mm256_broadcast_ps(reinterpret_cast<const __m128*>(b.hi[j]));
+        const __m128 a_lo = _mm_max_ps(_mm_load_ps(a.lo[j]), region.lo[j]);
+        const __m128 a_hi = _mm_min_ps(_mm_load_ps(a.hi[j]), region.hi[j]);
+        const __m128 b_lo = _mm_max_ps(_mm_load_ps(b.lo[j]), region.lo[j]);
+        const __m128 b_hi = _mm_min_ps(_mm_load_ps(b.hi[j]), region.hi[j]);
+        const __m256 a_lo8 = _mm256_castps128_ps256(a_lo), a_hi8 = _mm256_castps128_ps256(a_hi);
+        const __m256 b_lo8 = _mm256_set_m128(b_lo, b_lo), b_hi8 = _mm256_set_m128(b_hi, b_hi);
         const auto meet = [&](const __m256i& lanes) {
-            return _mm256_and_ps(_mm256_cmp_ps(_mm256_permutevar8x32_ps(a_lo, lanes), b_hi, _CMP_LE_OQ),
-                                 _mm256_cmp_ps(_mm256_permutevar8x32_ps(a_hi, lanes), b_lo, _CMP_GE_OQ));
+            return _mm256_and_ps(_mm256_cmp_ps(_mm256_permutevar8x32_ps(a_lo8, lanes), b_hi8, _CMP_LE_OQ),
+                                 _mm256_cmp_ps(_mm256_permutevar8x32_ps(a_hi8, lanes), b_lo8, _CMP_GE_OQ));
         };
         meet01 = _mm256_and_ps(meet01, meet(first));
         meet23 = _mm256_and_ps(meet23, meet(second));
     }
     return _mm256_movemask_ps(meet01) | (_mm256_movemask_ps(meet23) << 8);
 }
-
-/// Bit 4i + k of the result: bit i of `a_lanes` and bit k of `b_lanes` both set.
-int lane_pair_mask(int a_lanes, int b_lanes)
-{
-    int mask = 0;
-    for (int i = 0; i < 4; ++i)
-        if ((a_lanes >> i) & 1)
-            mask |= b_lanes << (4 * i);
-    return mask;
-}
 #endif
 
-/// f(i, k) for each lane i of `a` in `a_lanes` and lane k of `b` in `b_lanes` whose float boxes
-/// meet, i ascending, then k. `b_lanes_meeting(box)`: the lanes of `b` whose boxes meet `box`.
-template <class Node, class BLanesMeeting, class F>
-void for_each_lane_pair(const Node& a, [[maybe_unused]] const Node& b, int a_lanes, int b_lanes,
+/// f(i, k) for each lane i of `a` and lane k of `b` whose float boxes meet each other and
+/// `region`, i ascending, then k. `a_lanes_meeting(box)`, `b_lanes_meeting(box)`: the lanes of
+/// `a`, of `b`, whose boxes meet `box`.
+template <class Node, class ALanesMeeting, class BLanesMeeting, class F>
+void for_each_lane_pair(const Node& a, [[maybe_unused]] const Node& b, const WideBox& region,
+                        [[maybe_unused]] const ALanesMeeting& a_lanes_meeting,
                         [[maybe_unused]] const BLanesMeeting& b_lanes_meeting, const F& f)
 {
 #if defined(__AVX2__)
-    for (int m = lane_pairs_meeting(a, b) & lane_pair_mask(a_lanes, b_lanes); m != 0; m &= m - 1) {
+    for (int m = lane_pairs_meeting(a, b, region); m != 0; m &= m - 1) {
         const int bit = __builtin_ctz(static_cast<unsigned>(m));
         f(bit >> 2, bit & 3);
     }
 #else
-    for (int ma = a_lanes; ma != 0; ma &= ma - 1) {
+    const int b_lanes = b_lanes_meeting(region);
+    if (b_lanes == 0)
+        return;
+    for (int ma = a_lanes_meeting(region); ma != 0; ma &= ma - 1) {
         const int i = __builtin_ctz(static_cast<unsigned>(ma));
         const WideBox lane_a = lane_box(a, i);
         for (int mb = b_lanes_meeting(lane_a) & b_lanes; mb != 0; mb &= mb - 1)
@@ -184,15 +194,12 @@ std::vector<std::array<Index, 2>> AabbTree::walk_tasks(const AabbTree& other, co
         for (const auto& [na, nb] : level) {
             const WideNode& a = m_nodes[static_cast<std::size_t>(na)];
             const WideNode& b = other.m_nodes[static_cast<std::size_t>(nb)];
-            const int mask_b = other.lanes_meeting(nb, wide_region.lo, wide_region.hi);
-            const int mask_a = lanes_meeting(na, wide_region.lo, wide_region.hi);
-            if (mask_a == 0 || mask_b == 0)
-                continue;
             // A pair with a face lane among its children stays whole (the walk takes faces).
             const std::size_t before = next.size();
             bool faces = false;
             for_each_lane_pair(
-                a, b, mask_a, mask_b, [&](const WideBox& box) { return other.lanes_meeting(nb, box.lo, box.hi); },
+                a, b, wide_region, [&](const WideBox& box) { return lanes_meeting(na, box.lo, box.hi); },
+                [&](const WideBox& box) { return other.lanes_meeting(nb, box.lo, box.hi); },
                 [&](int i, int k) {
                     faces = faces || ((a.face_mask >> i) & 1) || ((b.face_mask >> k) & 1);
                     next.push_back({a.child[i], b.child[k]});
@@ -249,10 +256,6 @@ void AabbTree::walk_overlapping(const AabbTree& other, const Aabb& region, Index
         const auto [na, nb] = stack[--top];
         const WideNode& a = m_nodes[static_cast<std::size_t>(na)];
         const WideNode& b = other.m_nodes[static_cast<std::size_t>(nb)];
-        const int mask_b = other.lanes_meeting(nb, wide_region.lo, wide_region.hi);
-        if (mask_b == 0)
-            continue;
-        const int mask_a = lanes_meeting(na, wide_region.lo, wide_region.hi);
         // Lane pairs (i, k) whose boxes meet each other and the region, i ascending, then k.
         const auto take = [&](int i, int k) {
             const bool face_a = (a.face_mask >> i) & 1;
@@ -263,14 +266,17 @@ void AabbTree::walk_overlapping(const AabbTree& other, const Aabb& region, Index
                 emit(-1 - a.child[i], -1 - b.child[k]);
             } else if (face_a) {
                 const Index slot_a = -1 - a.child[i];
-                face_against(other, b.child[k], lane_box(a, i), [&](Index slot_b) { emit(slot_a, slot_b); });
+                face_against(other, b.child[k], clipped(lane_box(a, i), wide_region),
+                             [&](Index slot_b) { emit(slot_a, slot_b); });
             } else {
                 const Index slot_b = -1 - b.child[k];
-                face_against(*this, a.child[i], lane_box(b, k), [&](Index slot_a) { emit(slot_a, slot_b); });
+                face_against(*this, a.child[i], clipped(lane_box(b, k), wide_region),
+                             [&](Index slot_a) { emit(slot_a, slot_b); });
             }
         };
         for_each_lane_pair(
-            a, b, mask_a, mask_b, [&](const WideBox& box) { return other.lanes_meeting(nb, box.lo, box.hi); }, take);
+            a, b, wide_region, [&](const WideBox& box) { return lanes_meeting(na, box.lo, box.hi); },
+            [&](const WideBox& box) { return other.lanes_meeting(nb, box.lo, box.hi); }, take);
     }
 }
 

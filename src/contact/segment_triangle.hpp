@@ -1,9 +1,14 @@
 #pragma once
 /// @file segment_triangle.hpp
-/// @brief Whether a segment misses a triangle, shown by orientation signs beyond their rounding
+/// @brief Whether a segment misses a triangle (one, or four at once in AVX2 lanes), shown by
+/// orientation signs beyond their rounding
 /// (internal: AabbTree::segment_clear and AabbTree::clear_edge_groups share it).
 
 #include "orientation.hpp"
+
+#if defined(__AVX2__)
+#include <immintrin.h>
+#endif
 
 #include <cmath>
 
@@ -61,6 +66,130 @@ inline bool segment_misses_triangle(const double* p, const double* q, const doub
         return true;
     const SignedVolume e2 = volume(r, cp, ap);
     return ((positive(e0) || positive(e1)) && negative(e2)) || ((negative(e0) || negative(e1)) && positive(e2));
+}
+
+/// Triangles per call of segment_misses_triangles().
+constexpr int TRIANGLE_LANES = 4;
+
+#if defined(__AVX2__)
+namespace lanes {
+
+/// Four vertices' (x, y, z) as one register per coordinate, lane k from vertex k.
+inline void transpose(const double* const* v, __m256d& x, __m256d& y, __m256d& z)
+{
+    const __m256i xyz = _mm256_setr_epi64x(-1, -1, -1, 0); // a row is 3 doubles: no load past it
+    const __m256d v0 = _mm256_maskload_pd(v[0], xyz), v1 = _mm256_maskload_pd(v[1], xyz);
+    const __m256d v2 = _mm256_maskload_pd(v[2], xyz), v3 = _mm256_maskload_pd(v[3], xyz);
+    const __m256d xz01 = _mm256_unpacklo_pd(v0, v1), y01 = _mm256_unpackhi_pd(v0, v1);
+    const __m256d xz23 = _mm256_unpacklo_pd(v2, v3), y23 = _mm256_unpackhi_pd(v2, v3);
+    x = _mm256_permute2f128_pd(xz01, xz23, 0x20);
+    z = _mm256_permute2f128_pd(xz01, xz23, 0x31);
+    y = _mm256_permute2f128_pd(y01, y23, 0x20);
+}
+
+inline __m256d abs(__m256d v) { return _mm256_andnot_pd(_mm256_set1_pd(-0.0), v); }
+
+/// SignedVolume per lane, as masks: value > bound, value < −bound.
+struct Signs {
+    __m256d positive, negative;
+};
+
+inline Signs signs(__m256d value, __m256d bound)
+{
+    return {_mm256_cmp_pd(value, bound, _CMP_GT_OQ),
+            _mm256_cmp_pd(value, _mm256_sub_pd(_mm256_setzero_pd(), bound), _CMP_LT_OQ)};
+}
+
+/// volume(r, x, y) per lane, r the same in every lane.
+inline Signs volume(const __m256d* r, const __m256d* x, const __m256d* y)
+{
+    const __m256d m0 = _mm256_mul_pd(x[1], y[2]), m1 = _mm256_mul_pd(x[2], y[1]);
+    const __m256d m2 = _mm256_mul_pd(x[2], y[0]), m3 = _mm256_mul_pd(x[0], y[2]);
+    const __m256d m4 = _mm256_mul_pd(x[0], y[1]), m5 = _mm256_mul_pd(x[1], y[0]);
+    const __m256d value = _mm256_add_pd(
+        _mm256_add_pd(_mm256_mul_pd(r[0], _mm256_sub_pd(m0, m1)), _mm256_mul_pd(r[1], _mm256_sub_pd(m2, m3))),
+        _mm256_mul_pd(r[2], _mm256_sub_pd(m4, m5)));
+    const __m256d permanent =
+        _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(abs(r[0]), _mm256_add_pd(abs(m0), abs(m1))),
+                                    _mm256_mul_pd(abs(r[1]), _mm256_add_pd(abs(m2), abs(m3)))),
+                      _mm256_mul_pd(abs(r[2]), _mm256_add_pd(abs(m4), abs(m5))));
+    return signs(value, _mm256_mul_pd(_mm256_set1_pd(ORIENT3D_BOUND), permanent));
+}
+
+} // namespace lanes
+#endif
+
+/// segment_misses_triangle(p, q, a[k], b[k], c[k]) for triangles k < count ≤ TRIANGLE_LANES at
+/// once: bit k of the result is its answer (the same signs and bounds, evaluated in the four
+/// lanes of AVX2 registers where the build has them).
+inline int segment_misses_triangles(const double* p, const double* q, const double* const* a,
+                                    const double* const* b, const double* const* c, int count)
+{
+#if defined(__AVX2__)
+    // Unused lanes repeat triangle 0.
+    const double* corner[3][TRIANGLE_LANES];
+    for (int k = 0; k < TRIANGLE_LANES; ++k) {
+        const int from = k < count ? k : 0;
+        corner[0][k] = a[from];
+        corner[1][k] = b[from];
+        corner[2][k] = c[from];
+    }
+    __m256d A[3], B[3], C[3];
+    lanes::transpose(corner[0], A[0], A[1], A[2]);
+    lanes::transpose(corner[1], B[0], B[1], B[2]);
+    lanes::transpose(corner[2], C[0], C[1], C[2]);
+    // Plane side (as face_normal and the side of segment_misses_triangle).
+    __m256d n[3], permanent[3];
+    {
+        __m256d d1[3], d2[3];
+        for (int j = 0; j < 3; ++j) {
+            d1[j] = _mm256_sub_pd(B[j], A[j]);
+            d2[j] = _mm256_sub_pd(C[j], A[j]);
+        }
+        for (int j = 0; j < 3; ++j) {
+            const int u = (j + 1) % 3, v = (j + 2) % 3;
+            const __m256d first = _mm256_mul_pd(d1[u], d2[v]), second = _mm256_mul_pd(d1[v], d2[u]);
+            n[j] = _mm256_sub_pd(first, second);
+            permanent[j] = _mm256_add_pd(lanes::abs(first), lanes::abs(second));
+        }
+    }
+    const auto side = [&](const double* x) {
+        __m256d d[3];
+        for (int j = 0; j < 3; ++j)
+            d[j] = _mm256_sub_pd(_mm256_set1_pd(x[j]), A[j]);
+        const __m256d value = _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(n[0], d[0]), _mm256_mul_pd(n[1], d[1])),
+                                            _mm256_mul_pd(n[2], d[2]));
+        const __m256d bound = _mm256_mul_pd(
+            _mm256_set1_pd(ORIENT3D_BOUND),
+            _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(permanent[0], lanes::abs(d[0])),
+                                        _mm256_mul_pd(permanent[1], lanes::abs(d[1]))),
+                          _mm256_mul_pd(permanent[2], lanes::abs(d[2]))));
+        return lanes::signs(value, bound);
+    };
+    const lanes::Signs side_p = side(p), side_q = side(q);
+    __m256d clear = _mm256_or_pd(_mm256_and_pd(side_p.positive, side_q.positive),
+                                 _mm256_and_pd(side_p.negative, side_q.negative));
+    // Edge sides of the line.
+    __m256d r[3], ap[3], bp[3], cp[3];
+    for (int j = 0; j < 3; ++j) {
+        const __m256d pj = _mm256_set1_pd(p[j]);
+        r[j] = _mm256_set1_pd(q[j] - p[j]);
+        ap[j] = _mm256_sub_pd(A[j], pj);
+        bp[j] = _mm256_sub_pd(B[j], pj);
+        cp[j] = _mm256_sub_pd(C[j], pj);
+    }
+    const lanes::Signs e0 = lanes::volume(r, ap, bp), e1 = lanes::volume(r, bp, cp), e2 = lanes::volume(r, cp, ap);
+    clear = _mm256_or_pd(clear, _mm256_or_pd(_mm256_and_pd(e0.positive, e1.negative),
+                                             _mm256_and_pd(e0.negative, e1.positive)));
+    clear = _mm256_or_pd(clear, _mm256_and_pd(_mm256_or_pd(e0.positive, e1.positive), e2.negative));
+    clear = _mm256_or_pd(clear, _mm256_and_pd(_mm256_or_pd(e0.negative, e1.negative), e2.positive));
+    return _mm256_movemask_pd(clear) & ((1 << count) - 1);
+#else
+    int clear = 0;
+    for (int k = 0; k < count; ++k)
+        clear |= segment_misses_triangle(p, q, a[k], b[k], c[k]) ? 1 << k : 0;
+    return clear;
+#endif
 }
 
 } // namespace coro::detail
