@@ -224,11 +224,21 @@ void AabbTree::walk_overlapping(const AabbTree& other, const Aabb& region, Index
     // Float boxes bound the exact ones and the region is widened to floats, so a lane is dropped
     // only when its exact box misses; face pairs are then checked on their exact boxes.
     const WideBox wide_region = wide_box(region);
+    // The pairs gather on the stack and join `slots` a block at a time: pushed one by one, the
+    // growth of the many small vectors of a parallel walk cost as much as its box tests.
+    constexpr int BLOCK = 256;
+    std::array<Index, 2> block[BLOCK];
+    int in_block = 0;
     const auto emit = [&](Index slot_a, Index slot_b) {
         const Aabb& box_a = m_face_boxes[static_cast<std::size_t>(slot_a)];
         const Aabb& box_b = other.m_face_boxes[static_cast<std::size_t>(slot_b)];
-        if (three_boxes_meet(box_a, box_b, region))
-            slots.push_back({slot_a, slot_b});
+        if (!three_boxes_meet(box_a, box_b, region))
+            return;
+        block[in_block++] = {slot_a, slot_b};
+        if (in_block == BLOCK) {
+            slots.insert(slots.end(), block, block + BLOCK);
+            in_block = 0;
+        }
     };
     // One face, its float box `box` (a lane box of a node: it bounds the face's exact box),
     // against a subtree of the other tree.
@@ -278,6 +288,7 @@ void AabbTree::walk_overlapping(const AabbTree& other, const Aabb& region, Index
             a, b, wide_region, [&](const WideBox& box) { return lanes_meeting(na, box.lo, box.hi); },
             [&](const WideBox& box) { return other.lanes_meeting(nb, box.lo, box.hi); }, take);
     }
+    slots.insert(slots.end(), block, block + in_block);
 }
 
 } // namespace coro
