@@ -408,6 +408,12 @@ void AabbTree::vertices_in_box(CRef<Positions> vertices, const Aabb& box, std::v
         if (!m_vertex_blocks[b].overlaps(box))
             continue;
         const std::size_t end = std::min(m_vertex_order.size(), (b + 1) * VERTEX_BLOCK);
+        const Aabb& block = m_vertex_blocks[b];
+        if (box.contains(block.min) && box.contains(block.max)) { // every vertex of the block
+            out.insert(out.end(), m_vertex_order.begin() + static_cast<std::ptrdiff_t>(b * VERTEX_BLOCK),
+                       m_vertex_order.begin() + static_cast<std::ptrdiff_t>(end));
+            continue;
+        }
         for (std::size_t i = b * VERTEX_BLOCK; i < end; ++i) {
             const Index v = m_vertex_order[i];
             if (box.contains(row(vertices, v)))
