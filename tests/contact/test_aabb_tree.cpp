@@ -169,6 +169,24 @@ TEST(AabbTree, QueriesEqualBruteForceOnRandomTriangles)
     expect_queries_equal_brute_force(tree, m, rng, 300);
 }
 
+TEST(AabbTree, NodesHoldFourChildrenButOnePerLevel)
+{
+    // A node with four children adds three to the count of things to hold, so F faces need at
+    // least ⌈(F − 1)/3⌉ nodes; the build may leave one node per level short. Splits at the plain
+    // median made 853 nodes over the 1,728 faces of the 10k-tet sphere, where 577 do.
+    std::mt19937 rng(9);
+    for (const Index faces : {2, 3, 4, 5, 7, 17, 27, 100, 700, 1728, 8112}) {
+        const SurfaceMesh m = random_triangles(faces, rng);
+        AabbTree tree;
+        tree.build(m.vertices, m.faces);
+        Index levels = 0;
+        for (Index capacity = 1; capacity < faces; capacity *= 4)
+            ++levels;
+        EXPECT_GE(tree.num_nodes(), (faces - 1 + 2) / 3) << faces << " faces";
+        EXPECT_LE(tree.num_nodes(), (faces - 1 + 2) / 3 + levels) << faces << " faces";
+    }
+}
+
 TEST(AabbTree, QueriesEqualBruteForceAfterRefit)
 {
     std::mt19937 rng(6);

@@ -56,6 +56,8 @@ public:
     /// Box of the whole surface (empty for an empty tree).
     const Aabb& bounds() const;
     Index num_faces() const { return static_cast<Index>(m_faces.rows()); }
+    /// Nodes of the hierarchy (each holds up to four children, faces or nodes).
+    Index num_nodes() const { return static_cast<Index>(m_nodes.size()); }
     const Tris& faces() const { return m_faces; }
 
     /// Faces whose box overlaps `box` (closed intervals), ascending.
