@@ -86,7 +86,7 @@ Index AabbTree::build_node(const std::vector<Vec3>& centroids, Index begin, Inde
     // Up to four parts, kept in range order, each a whole number of `unit` faces (the faces of a
     // full subtree: 1, 4, 16, …) but one: the largest part is split along the longest axis of
     // its centroids, as near its median as whole units allow, until there are `target` parts.
-    // So every node holds four children except one node per level: splits at the plain median
+    // So every node holds four children but at most one per level: splits at the plain median
     // left many nodes two faces or two subtrees (853 nodes over 1,728 faces, where 577 can do),
     // and every walk, query and refit paid for their empty lanes.
     const Index n = end - begin;

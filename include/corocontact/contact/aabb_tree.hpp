@@ -31,9 +31,9 @@ class AabbTree {
 public:
     AabbTree() = default;
 
-    /// Builds the hierarchy over `faces` at `vertices`: four children per node but at most one per level
-    /// (splits of the face centroids along the longest axis, at the median rounded to whole full
-    /// subtrees of 1, 4, 16, … faces), one face per leaf child: about #F/3 nodes.
+    /// Builds the hierarchy over `faces` at `vertices`: four children per node but at most one
+    /// per level (splits of the face centroids along the longest axis, at the median rounded to
+    /// whole full subtrees of 1, 4, 16, … faces), one face per leaf child: about #F/3 nodes.
     /// @param[in] vertices  #V×3 positions
     /// @param[in] faces     #F×3 indices into vertices; the tree stores its own copy of the face
     ///                      list, so `faces` may go away after the call
