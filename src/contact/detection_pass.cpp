@@ -3,6 +3,8 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include <corocontact/core/error.hpp>
+
 #include <algorithm>
 #include <cstdint>
 
@@ -39,55 +41,52 @@ std::vector<ContactPoint> sorted_points(const std::vector<ContactSurface>& surfa
     std::vector<ContactPoint> points(total);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, bodies.size(), 1), [&](const tbb::blocked_range<std::size_t>& r) {
         std::vector<Index> start;
-        std::vector<std::size_t> order;
         std::vector<std::pair<std::uint64_t, std::size_t>> keys;
         for (std::size_t j = r.begin(); j < r.end(); ++j) {
             const auto [first, last, output] = bodies[j];
             const std::size_t count = (j + 1 < bodies.size() ? bodies[j + 1].output : total) - output;
             const Index body = candidates[first].body;
             ContactPoint* out = points.data() + output;
-            // Slot i of this body's pairs: its pair, found among few.
-            const auto emit = [&](std::size_t i) {
+            // Slot i, candidate `vertex` of a pair with `other`, becomes the point at `place`.
+            const auto emit = [&](ContactPoint& place, std::size_t i, Index vertex, Index other) {
                 if (!slots.empty()) {
-                    *out++ = slots[i];
+                    place = slots[i];
                     return;
                 }
-                const auto k = static_cast<std::size_t>(
-                    std::upper_bound(offsets.begin() + static_cast<std::ptrdiff_t>(first),
-                                     offsets.begin() + static_cast<std::ptrdiff_t>(last), i) -
-                    offsets.begin() - 1);
-                ContactPoint& c = *out++;
-                c.body = body;
-                c.vertex = candidates[k].vertices[i - offsets[k]];
-                c.other = candidates[k].other;
+                place.body = body;
+                place.vertex = vertex;
+                place.other = other;
             };
-            const auto vertex_of = [&](std::size_t k, std::size_t i) { return candidates[k].vertices[i - offsets[k]]; };
             const auto vertices = static_cast<std::size_t>(surfaces[static_cast<std::size_t>(body)].vertices.rows());
             if (8 * count >= vertices) {
                 start.assign(vertices + 1, 0);
-                for (std::size_t k = first; k < last; ++k)
-                    for (std::size_t i = offsets[k]; i < offsets[k + 1]; ++i)
-                        start[static_cast<std::size_t>(vertex_of(k, i)) + 1] += inside[i];
+                for (std::size_t k = first; k < last; ++k) {
+                    const std::vector<Index>& vertex = candidates[k].vertices;
+                    const unsigned char* flag = inside.data() + offsets[k];
+                    for (std::size_t i = 0; i < vertex.size(); ++i)
+                        start[static_cast<std::size_t>(vertex[i]) + 1] += flag[i];
+                }
                 for (std::size_t v = 0; v < vertices; ++v)
                     start[v + 1] += start[v];
-                order.resize(count);
-                for (std::size_t k = first; k < last; ++k) // others ascending: stable within a vertex
-                    for (std::size_t i = offsets[k]; i < offsets[k + 1]; ++i)
-                        if (inside[i])
-                            order[static_cast<std::size_t>(start[static_cast<std::size_t>(vertex_of(k, i))]++)] = i;
-                for (const std::size_t i : order)
-                    emit(i);
+                for (std::size_t k = first; k < last; ++k) { // others ascending: stable within a vertex
+                    const std::vector<Index>& vertex = candidates[k].vertices;
+                    const unsigned char* flag = inside.data() + offsets[k];
+                    for (std::size_t i = 0; i < vertex.size(); ++i)
+                        if (flag[i])
+                            emit(out[start[static_cast<std::size_t>(vertex[i])]++], offsets[k] + i, vertex[i],
+                                 candidates[k].other);
+                }
             } else {
                 keys.clear();
                 for (std::size_t k = first; k < last; ++k)
                     for (std::size_t i = offsets[k]; i < offsets[k + 1]; ++i)
                         if (inside[i])
-                            keys.emplace_back((static_cast<std::uint64_t>(vertex_of(k, i)) << 32) |
+                            keys.emplace_back((static_cast<std::uint64_t>(candidates[k].vertices[i - offsets[k]]) << 32) |
                                                   static_cast<std::uint32_t>(candidates[k].other),
                                               i);
                 std::sort(keys.begin(), keys.end());
-                for (const auto& key : keys)
-                    emit(key.second);
+                for (const auto& [key, i] : keys)
+                    emit(*out++, i, static_cast<Index>(key >> 32), static_cast<Index>(key & 0xffffffffU));
             }
         }
     });
@@ -201,6 +200,44 @@ void DetectionPass::take(std::size_t k, Index first, Index count, const InsideTe
             continue;
         slots[i] = contact_point(m_surfaces, pair.body, pair.vertices[static_cast<std::size_t>(first + i)],
                                  pair.other, results[i].surface_distance_bound, hint_face);
+        hint_face = slots[i].face;
+    }
+}
+
+void DetectionPass::take(std::size_t k, Index first, Index count, const GroupedAnswers& answers)
+{
+    const PairCandidates& pair = m_candidates[k];
+    unsigned char* inside = m_inside.data() + m_offsets[k] + static_cast<std::size_t>(first);
+    const Index* decider = answers.decider.data() + first;
+    const InsideTest* answer = answers.answer.data();
+    Index on_surface = 0, fallbacks = 0, by_neighbour = 0, inside_count = 0;
+    for (Index i = 0; i < count; ++i) {
+        const InsideTest& result = answer[decider[i]];
+        const bool own = decider[i] == first + i;
+        on_surface += own && result.on_surface ? 1 : 0;
+        fallbacks += own && result.deciding_axis == 3 ? 1 : 0;
+        by_neighbour += own ? 0 : 1;
+        inside[i] = result.inside ? 1 : 0;
+        inside_count += result.inside ? 1 : 0;
+    }
+    DetectionStats& counts = m_stats.local();
+    counts.candidate_vertices += count;
+    counts.on_surface += on_surface;
+    counts.winding_fallbacks += fallbacks;
+    counts.by_neighbour += by_neighbour;
+    counts.inside += inside_count;
+    if (!m_contact_data)
+        return;
+    CORO_ASSERT(!m_nearest);
+    ContactPoint* slots = m_slots.data() + m_offsets[k] + static_cast<std::size_t>(first);
+    Index hint_face = -1; // as in take() above
+    for (Index i = 0; i < count; ++i) {
+        if (!inside[i])
+            continue;
+        const auto c = static_cast<std::size_t>(first + i);
+        const double bound = decider[i] == first + i ? answer[c].surface_distance_bound
+                                                     : shared_distance_bound(answers, c);
+        slots[i] = contact_point(m_surfaces, pair.body, pair.vertices[c], pair.other, bound, hint_face);
         hint_face = slots[i].face;
     }
 }

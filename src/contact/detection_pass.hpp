@@ -5,6 +5,8 @@
 
 #include <corocontact/contact/detector.hpp>
 
+#include "grouped_inside_tests.hpp"
+
 #include <tbb/enumerable_thread_specific.h>
 
 #include <vector>
@@ -36,6 +38,9 @@ public:
 
     /// Candidates first .. first + count − 1 of pair k, answered by results[0 .. count − 1].
     void take(std::size_t k, Index first, Index count, const InsideTest* results);
+
+    /// Candidates first .. first + count − 1 of pair k, answered by their groups' tests.
+    void take(std::size_t k, Index first, Index count, const GroupedAnswers& answers);
 
     bool contact_data() const { return m_contact_data; }
 

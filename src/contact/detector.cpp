@@ -135,12 +135,12 @@ std::vector<ContactPoint> detect_contacts(const std::vector<ContactSurface>& sur
     DetectionPass pass(surfaces, candidates, settings.contact_data);
     detail::grouped_inside_tests(
         surfaces, candidates, settings.tolerances, settings.contact_data,
-        [&](std::size_t k, const std::vector<InsideTest>& answers) {
-            const auto n = static_cast<Index>(answers.size());
+        [&](std::size_t k, const detail::GroupedAnswers& answers) {
+            const auto n = static_cast<Index>(answers.decider.size());
             const Index blocks = (n + VERTEX_BLOCK - 1) / VERTEX_BLOCK;
             const auto take_block = [&](Index b) {
                 const Index first = b * VERTEX_BLOCK;
-                pass.take(k, first, std::min(VERTEX_BLOCK, n - first), answers.data() + first);
+                pass.take(k, first, std::min(VERTEX_BLOCK, n - first), answers);
             };
             if (!pass.contact_data() || blocks <= 1) {
                 for (Index b = 0; b < blocks; ++b)

@@ -20,7 +20,7 @@ constexpr std::size_t TEST_BLOCK = 256;
 
 void grouped_inside_tests(const std::vector<ContactSurface>& surfaces, const std::vector<PairCandidates>& candidates,
                           const AxisRayTolerances& tolerances, bool distance_bounds,
-                          const std::function<void(std::size_t pair, const std::vector<InsideTest>& answers)>& use)
+                          const std::function<void(std::size_t pair, const GroupedAnswers& answers)>& use)
 {
     const std::size_t pairs = candidates.size();
     // The face pairs (as tree slots) of each body pair, found once for both directions:
@@ -52,12 +52,12 @@ void grouped_inside_tests(const std::vector<ContactSurface>& surfaces, const std
         }
     });
     // Per pair, in one task: the groups, the tests of their first vertices (blocks of them as
-    // nested tasks when there are many), the answers shared with the rest of each group, and
-    // their use.
+    // nested tasks when there are many) and their use, where the rest of each group take them.
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, pairs, 1), [&](const tbb::blocked_range<std::size_t>& r) {
-        std::vector<Index> decider, tested;
-        std::vector<double> path;
-        std::vector<InsideTest> answer;
+        GroupedAnswers answers;
+        std::vector<Index>& decider = answers.decider;
+        std::vector<InsideTest>& answer = answers.answer;
+        std::vector<Index> tested;
         for (std::size_t k = r.begin(); k < r.end(); ++k) {
             const PairCandidates& pair = candidates[k];
             const ContactSurface& body = surfaces[static_cast<std::size_t>(pair.body)];
@@ -66,13 +66,13 @@ void grouped_inside_tests(const std::vector<ContactSurface>& surfaces, const std
             if (other.closed) {
                 body.tree.clear_edge_groups(body.vertices, other.tree, other.vertices, slot_pairs[lower[k]],
                                             lower[k] == k ? 0 : 1, pair.vertices, decider,
-                                            distance_bounds ? &path : nullptr);
+                                            distance_bounds ? &answers.path : nullptr);
             } else {
                 decider.resize(n);
                 for (std::size_t i = 0; i < n; ++i)
                     decider[i] = static_cast<Index>(i);
                 if (distance_bounds)
-                    path.assign(n, 0.0);
+                    answers.path.assign(n, 0.0);
             }
             tested.clear();
             for (std::size_t i = 0; i < n; ++i)
@@ -103,22 +103,7 @@ void grouped_inside_tests(const std::vector<ContactSurface>& surfaces, const std
                                   });
             }
 
-            for (std::size_t i = 0; i < n; ++i) {
-                const std::size_t d = static_cast<std::size_t>(decider[i]);
-                if (d == i)
-                    continue;
-                const InsideTest& from = answer[d];
-                InsideTest& to = answer[i];
-                to = InsideTest();
-                to.inside = from.inside;
-                to.deciding_axis = DECIDED_BY_NEIGHBOUR;
-                to.crossing_face = from.crossing_face;
-                // Some point of the surface lies within the decider's bound of it; the sum is
-                // rounded up by a relative 10⁻¹² (far above the rounding of the two terms).
-                if (distance_bounds)
-                    to.surface_distance_bound = (from.surface_distance_bound + path[i]) * (1.0 + 1e-12);
-            }
-            use(k, answer);
+            use(k, answers);
         }
     });
 }

@@ -10,17 +10,34 @@
 
 namespace coro::detail {
 
-/// Exact-mode answers for every candidate vertex, handed over pair by pair: use(k, answers) with
-/// answers[i] for candidates[k].vertices[i], called once per pair from that pair's TBB task
-/// (pairs run in parallel; `use` may start nested tasks). Where the other surface is closed, the
-/// candidates of a pair are grouped by AabbTree::clear_edge_groups and only the first of each
-/// group is tested (inside_tests()); the others take its answer with deciding_axis
-/// DECIDED_BY_NEIGHBOUR, on_surface false, its crossing_face and, as surface_distance_bound,
-/// its bound plus their path (+∞ without `distance_bounds`: no path lengths are summed). Else
-/// every candidate is tested. The tests of a pair with many groups run in nested tasks; the
-/// answers do not depend on the scheduling.
+/// The exact-mode answers of one pair's candidates, by groups: candidate i takes the test of
+/// candidate decider[i] (decider[i] == i: its own), which is answer[decider[i]] (the entries of
+/// the others are not written). With distance bounds, path[i] is a length of a path of clear
+/// edges from candidate decider[i] to candidate i [m] (0 for a decider).
+struct GroupedAnswers {
+    std::vector<Index> decider;     ///< size n (the pair's candidates)
+    std::vector<InsideTest> answer; ///< size n, valid where decider[i] == i
+    std::vector<double> path;       ///< size n with distance bounds, else empty
+};
+
+/// Exact-mode answers for every candidate vertex, handed over pair by pair: use(k, answers) for
+/// candidates[k].vertices, called once per pair from that pair's TBB task (pairs run in parallel;
+/// `use` may start nested tasks). Where the other surface is closed, the candidates of a pair are
+/// grouped by AabbTree::clear_edge_groups and only the first of each group is tested
+/// (inside_tests()); the others share its answer (a neighbour's answer: see InsideTest
+/// DECIDED_BY_NEIGHBOUR and shared_distance_bound()). Else every candidate is tested. The tests of a pair
+/// with many groups run in nested tasks; the answers do not depend on the scheduling.
 void grouped_inside_tests(const std::vector<ContactSurface>& surfaces, const std::vector<PairCandidates>& candidates,
                           const AxisRayTolerances& tolerances, bool distance_bounds,
-                          const std::function<void(std::size_t pair, const std::vector<InsideTest>& answers)>& use);
+                          const std::function<void(std::size_t pair, const GroupedAnswers& answers)>& use);
+
+/// The surface distance bound of candidate i of `answers` that is not a decider: its decider's
+/// bound plus its path, rounded up by a relative 10⁻¹² (far above the rounding of the two terms),
+/// so some point of the surface lies within it [m].
+inline double shared_distance_bound(const GroupedAnswers& answers, std::size_t i)
+{
+    const InsideTest& from = answers.answer[static_cast<std::size_t>(answers.decider[i])];
+    return (from.surface_distance_bound + answers.path[i]) * (1.0 + 1e-12);
+}
 
 } // namespace coro::detail
