@@ -169,6 +169,11 @@ inline int segment_misses_triangles(const double* p, const double* q, const doub
     const lanes::Signs side_p = side(p), side_q = side(q);
     __m256d clear = _mm256_or_pd(_mm256_and_pd(side_p.positive, side_q.positive),
                                  _mm256_and_pd(side_p.negative, side_q.negative));
+    // A third of the batches of clear_edge_groups are decided here: all their triangles' planes
+    // leave both ends of the segment on one side.
+    const int all = (1 << count) - 1;
+    if ((_mm256_movemask_pd(clear) & all) == all)
+        return all;
     // Edge sides of the line.
     __m256d r[3], ap[3], bp[3], cp[3];
     for (int j = 0; j < 3; ++j) {
@@ -183,7 +188,7 @@ inline int segment_misses_triangles(const double* p, const double* q, const doub
                                              _mm256_and_pd(e0.negative, e1.positive)));
     clear = _mm256_or_pd(clear, _mm256_and_pd(_mm256_or_pd(e0.positive, e1.positive), e2.negative));
     clear = _mm256_or_pd(clear, _mm256_and_pd(_mm256_or_pd(e0.negative, e1.negative), e2.positive));
-    return _mm256_movemask_pd(clear) & ((1 << count) - 1);
+    return _mm256_movemask_pd(clear) & all;
 #else
     int clear = 0;
     for (int k = 0; k < count; ++k)
