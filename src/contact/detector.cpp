@@ -7,6 +7,7 @@
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_invoke.h>
 
 #include <algorithm>
 #include <limits>
@@ -64,16 +65,21 @@ std::vector<ContactPoint> run_detection(const std::vector<ContactSurface>& surfa
     return pass.finish(count_pairs(candidates), stats);
 }
 
-} // namespace
-
-std::vector<PairCandidates> contact_candidates(const std::vector<ContactSurface>& surfaces, DetectionMode mode)
+/// The broad phase: the pairs of surfaces whose boxes (from their trees) overlap, sorted.
+std::vector<std::pair<Index, Index>> overlapping_surfaces(const std::vector<ContactSurface>& surfaces)
 {
     std::vector<Aabb> boxes;
     boxes.reserve(surfaces.size());
     for (const ContactSurface& s : surfaces)
         boxes.push_back(s.tree.bounds());
-    const auto pairs = overlapping_pairs(boxes);
+    return overlapping_pairs(boxes);
+}
 
+/// contact_candidates() of the broad phase's `pairs`.
+std::vector<PairCandidates> pair_candidates(const std::vector<ContactSurface>& surfaces,
+                                            const std::vector<std::pair<Index, Index>>& pairs, DetectionMode mode)
+{
+    const auto box = [&](Index s) { return surfaces[static_cast<std::size_t>(s)].tree.bounds(); };
     std::vector<PairCandidates> candidates(2 * pairs.size());
     for (std::size_t k = 0; k < pairs.size(); ++k) {
         const auto [a, b] = pairs[k];
@@ -89,8 +95,7 @@ std::vector<PairCandidates> contact_candidates(const std::vector<ContactSurface>
                               PairCandidates& c = candidates[k];
                               const ContactSurface& body = surfaces[static_cast<std::size_t>(c.body)];
                               const ContactSurface& other = surfaces[static_cast<std::size_t>(c.other)];
-                              c.overlap = boxes[static_cast<std::size_t>(c.body)].intersection(
-                                  boxes[static_cast<std::size_t>(c.other)]);
+                              c.overlap = box(c.body).intersection(box(c.other));
                               body.tree.vertices_in_box(body.vertices, c.overlap, c.vertices);
                               if (mode != DetectionMode::PAPER)
                                   continue;
@@ -111,6 +116,13 @@ std::vector<PairCandidates> contact_candidates(const std::vector<ContactSurface>
     return candidates;
 }
 
+} // namespace
+
+std::vector<PairCandidates> contact_candidates(const std::vector<ContactSurface>& surfaces, DetectionMode mode)
+{
+    return pair_candidates(surfaces, overlapping_surfaces(surfaces), mode);
+}
+
 ContactPoint make_contact_point(const std::vector<ContactSurface>& surfaces, Index body, Index vertex, Index other)
 {
     return detail::contact_point(surfaces, body, vertex, other, std::numeric_limits<double>::infinity(), -1);
@@ -119,8 +131,8 @@ ContactPoint make_contact_point(const std::vector<ContactSurface>& surfaces, Ind
 std::vector<ContactPoint> detect_contacts(const std::vector<ContactSurface>& surfaces,
                                           const DetectionSettings& settings, DetectionStats* stats)
 {
-    const std::vector<PairCandidates> candidates = contact_candidates(surfaces, settings.mode);
-    if (!settings.share_answers || settings.mode != DetectionMode::EXACT)
+    if (!settings.share_answers || settings.mode != DetectionMode::EXACT) {
+        const std::vector<PairCandidates> candidates = contact_candidates(surfaces, settings.mode);
         return run_detection(
             surfaces, candidates,
             [&](std::size_t k, const Vec3* points, Index count, InsideTest* results) {
@@ -129,12 +141,20 @@ std::vector<ContactPoint> detect_contacts(const std::vector<ContactSurface>& sur
                              settings.tolerances, results);
             },
             settings.contact_data, stats);
+    }
 
+    // The mid phase and the face pairs of the groups need only the broad phase: one parallel
+    // phase for both (on two threads, each phase of its own left a thread waiting).
+    const auto pairs = overlapping_surfaces(surfaces);
+    std::vector<PairCandidates> candidates;
+    std::vector<detail::SlotPairs> slot_pairs;
+    tbb::parallel_invoke([&] { candidates = pair_candidates(surfaces, pairs, settings.mode); },
+                         [&] { slot_pairs = detail::overlapping_slot_pairs(surfaces, pairs); });
     // Each pair's answers are taken in its own task, as they come; with depth searches to do,
     // its blocks are nested tasks.
     DetectionPass pass(surfaces, candidates, settings.contact_data);
     detail::grouped_inside_tests(
-        surfaces, candidates, settings.tolerances, settings.contact_data,
+        surfaces, candidates, slot_pairs, settings.tolerances, settings.contact_data,
         [&](std::size_t k, const detail::GroupedAnswers& answers) {
             const auto n = static_cast<Index>(answers.decider.size());
             const Index blocks = (n + VERTEX_BLOCK - 1) / VERTEX_BLOCK;

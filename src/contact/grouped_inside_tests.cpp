@@ -18,39 +18,47 @@ constexpr std::size_t TEST_BLOCK = 256;
 
 } // namespace
 
+std::vector<SlotPairs> overlapping_slot_pairs(const std::vector<ContactSurface>& surfaces,
+                                              const std::vector<std::pair<Index, Index>>& pairs)
+{
+    std::vector<SlotPairs> slot_pairs(pairs.size());
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, pairs.size(), 1), [&](const tbb::blocked_range<std::size_t>& r) {
+        for (std::size_t j = r.begin(); j < r.end(); ++j) {
+            const ContactSurface& a = surfaces[static_cast<std::size_t>(pairs[j].first)];
+            const ContactSurface& b = surfaces[static_cast<std::size_t>(pairs[j].second)];
+            if (a.closed || b.closed)
+                a.tree.overlapping_slots(b.tree, a.tree.bounds().intersection(b.tree.bounds()), slot_pairs[j]);
+        }
+    });
+    return slot_pairs;
+}
+
 void grouped_inside_tests(const std::vector<ContactSurface>& surfaces, const std::vector<PairCandidates>& candidates,
-                          const AxisRayTolerances& tolerances, bool distance_bounds,
+                          const std::vector<SlotPairs>& slot_pairs, const AxisRayTolerances& tolerances,
+                          bool distance_bounds,
                           const std::function<void(std::size_t pair, const GroupedAnswers& answers)>& use)
 {
     const std::size_t pairs = candidates.size();
-    // The face pairs (as tree slots) of each body pair, found once for both directions:
-    // candidates holds (a, b) and (b, a), the region I is the same.
-    std::vector<std::vector<std::array<Index, 2>>> slot_pairs(pairs);
-    std::vector<std::size_t> lower(pairs); // the direction whose body < other, for each k
-    std::vector<std::size_t> walks;
+    // The face pairs of each k: candidates holds (a, b) and (b, a), ordered by (body, other), so
+    // those with body < other come in the order of their pairs; the other direction takes the
+    // slot pairs of its reverse, columns swapped.
+    std::vector<std::size_t> pair_of(pairs);
+    std::size_t lower = 0;
+    for (std::size_t k = 0; k < pairs; ++k)
+        if (candidates[k].body < candidates[k].other)
+            pair_of[k] = lower++;
+    CORO_ASSERT(lower == slot_pairs.size());
     for (std::size_t k = 0; k < pairs; ++k) {
         const PairCandidates& pair = candidates[k];
         if (pair.body < pair.other)
-            walks.push_back(k);
-        lower[k] = k;
-        if (pair.body > pair.other) { // candidates are ordered by (body, other)
-            const auto reverse = std::lower_bound(candidates.begin(), candidates.end(), pair,
-                                                  [](const PairCandidates& x, const PairCandidates& y) {
-                                                      return std::tie(x.body, x.other) < std::tie(y.other, y.body);
-                                                  });
-            CORO_ASSERT(reverse != candidates.end() && reverse->body == pair.other && reverse->other == pair.body);
-            lower[k] = static_cast<std::size_t>(reverse - candidates.begin());
-        }
+            continue;
+        const auto reverse = std::lower_bound(candidates.begin(), candidates.end(), pair,
+                                              [](const PairCandidates& x, const PairCandidates& y) {
+                                                  return std::tie(x.body, x.other) < std::tie(y.other, y.body);
+                                              });
+        CORO_ASSERT(reverse != candidates.end() && reverse->body == pair.other && reverse->other == pair.body);
+        pair_of[k] = pair_of[static_cast<std::size_t>(reverse - candidates.begin())];
     }
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, walks.size(), 1), [&](const tbb::blocked_range<std::size_t>& r) {
-        for (std::size_t w = r.begin(); w < r.end(); ++w) {
-            const PairCandidates& pair = candidates[walks[w]];
-            const ContactSurface& body = surfaces[static_cast<std::size_t>(pair.body)];
-            const ContactSurface& other = surfaces[static_cast<std::size_t>(pair.other)];
-            if (other.closed || body.closed)
-                body.tree.overlapping_slots(other.tree, pair.overlap, slot_pairs[walks[w]]);
-        }
-    });
     // Per pair, in one task: the groups, the tests of their first vertices (blocks of them as
     // nested tasks when there are many) and their use, where the rest of each group take them.
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, pairs, 1), [&](const tbb::blocked_range<std::size_t>& r) {
@@ -64,8 +72,8 @@ void grouped_inside_tests(const std::vector<ContactSurface>& surfaces, const std
             const ContactSurface& other = surfaces[static_cast<std::size_t>(pair.other)];
             const std::size_t n = pair.vertices.size();
             if (other.closed) {
-                body.tree.clear_edge_groups(body.vertices, other.tree, other.vertices, slot_pairs[lower[k]],
-                                            lower[k] == k ? 0 : 1, pair.vertices, decider,
+                body.tree.clear_edge_groups(body.vertices, other.tree, other.vertices, slot_pairs[pair_of[k]],
+                                            pair.body < pair.other ? 0 : 1, pair.vertices, decider,
                                             distance_bounds ? &answers.path : nullptr);
             } else {
                 decider.resize(n);

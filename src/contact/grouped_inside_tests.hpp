@@ -5,7 +5,9 @@
 
 #include <corocontact/contact/detector.hpp>
 
+#include <array>
 #include <functional>
+#include <utility>
 #include <vector>
 
 namespace coro::detail {
@@ -20,6 +22,14 @@ struct GroupedAnswers {
     std::vector<double> path;       ///< size n with distance bounds, else empty
 };
 
+/// Face pairs (face of the first surface, face of the second, as tree slots).
+using SlotPairs = std::vector<std::array<Index, 2>>;
+
+/// For each pair (a, b) of `pairs`, AabbTree::overlapping_slots of a's tree and b's over the
+/// overlap of their boxes when either surface is closed (else none), as TBB tasks.
+std::vector<SlotPairs> overlapping_slot_pairs(const std::vector<ContactSurface>& surfaces,
+                                              const std::vector<std::pair<Index, Index>>& pairs);
+
 /// Exact-mode answers for every candidate vertex, handed over pair by pair: use(k, answers) for
 /// candidates[k].vertices, called once per pair from that pair's TBB task (pairs run in parallel;
 /// `use` may start nested tasks). Where the other surface is closed, the candidates of a pair are
@@ -27,8 +37,10 @@ struct GroupedAnswers {
 /// (inside_tests()); the others share its answer (a neighbour's answer: see InsideTest
 /// DECIDED_BY_NEIGHBOUR and shared_distance_bound()). Else every candidate is tested. The tests of a pair
 /// with many groups run in nested tasks; the answers do not depend on the scheduling.
+/// @param[in] slot_pairs  overlapping_slot_pairs() of the pairs (body < other) of `candidates`,
+///                        in their order
 void grouped_inside_tests(const std::vector<ContactSurface>& surfaces, const std::vector<PairCandidates>& candidates,
-                          const AxisRayTolerances& tolerances, bool distance_bounds,
+                          const std::vector<SlotPairs>& slot_pairs, const AxisRayTolerances& tolerances, bool distance_bounds,
                           const std::function<void(std::size_t pair, const GroupedAnswers& answers)>& use);
 
 /// The surface distance bound of candidate i of `answers` that is not a decider: its decider's
