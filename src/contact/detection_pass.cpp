@@ -7,17 +7,22 @@
 
 #include <algorithm>
 #include <cstdint>
+#include <memory>
 
 namespace coro::detail {
 
 namespace {
 
+/// The end of a chain of slots in sorted_points().
+constexpr std::uint32_t NONE = ~std::uint32_t{0};
+
 /// The points of the slots flagged in `inside`, sorted by (body, vertex, other). `candidates` is
-/// ordered by (body, other) and slot offsets[k] + i belongs to its pair k's candidate i, so a
-/// stable counting sort by vertex over each body's pairs gives that order in O(points + vertices);
-/// a body with few points against many vertices sorts keys instead. `slots` holds each inside
-/// slot's point with its depth and normal; empty: the points carry body, vertex and other only.
-/// The bodies are TBB tasks, each writing its own range of the output.
+/// ordered by (body, other) and slot offsets[k] + i belongs to its pair k's candidate i, a vertex
+/// at most once per pair. Per body, a bit per vertex marks those inside and each marked vertex
+/// heads a chain of its slots, linked from the body's last pair back so that it runs by other
+/// ascending; the marks are then read in order: O(points + candidates + vertices / 64). `slots`
+/// holds each inside slot's point with its depth and normal; empty: the points carry body,
+/// vertex and other only. The bodies are TBB tasks, each writing its own range of the output.
 std::vector<ContactPoint> sorted_points(const std::vector<ContactSurface>& surfaces,
                                         const std::vector<PairCandidates>& candidates,
                                         const std::vector<std::size_t>& offsets, const std::vector<ContactPoint>& slots,
@@ -38,56 +43,63 @@ std::vector<ContactPoint> sorted_points(const std::vector<ContactSurface>& surfa
         total += count;
         first = last;
     }
+    CORO_ASSERT(offsets.back() < NONE);
     std::vector<ContactPoint> points(total);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, bodies.size(), 1), [&](const tbb::blocked_range<std::size_t>& r) {
-        std::vector<Index> start;
-        std::vector<std::pair<std::uint64_t, std::size_t>> keys;
+        // A link of a chain: the next slot of the same vertex (NONE: the last) and its other body,
+        // by slot − the body's first slot. Neither the links nor the heads are initialised: only
+        // those of inside slots and of marked vertices are read.
+        struct Link {
+            std::uint32_t next;
+            Index other;
+        };
+        std::vector<std::uint64_t> marked;
+        std::unique_ptr<std::uint32_t[]> head;
+        std::unique_ptr<Link[]> link;
+        std::size_t head_size = 0, link_size = 0;
         for (std::size_t j = r.begin(); j < r.end(); ++j) {
             const auto [first, last, output] = bodies[j];
-            const std::size_t count = (j + 1 < bodies.size() ? bodies[j + 1].output : total) - output;
             const Index body = candidates[first].body;
-            ContactPoint* out = points.data() + output;
-            // Slot i, candidate `vertex` of a pair with `other`, becomes the point at `place`.
-            const auto emit = [&](ContactPoint& place, std::size_t i, Index vertex, Index other) {
-                if (!slots.empty()) {
-                    place = slots[i];
-                    return;
-                }
-                place.body = body;
-                place.vertex = vertex;
-                place.other = other;
-            };
             const auto vertices = static_cast<std::size_t>(surfaces[static_cast<std::size_t>(body)].vertices.rows());
-            if (8 * count >= vertices) {
-                start.assign(vertices + 1, 0);
-                for (std::size_t k = first; k < last; ++k) {
-                    const std::vector<Index>& vertex = candidates[k].vertices;
-                    const unsigned char* flag = inside.data() + offsets[k];
-                    for (std::size_t i = 0; i < vertex.size(); ++i)
-                        start[static_cast<std::size_t>(vertex[i]) + 1] += flag[i];
+            marked.assign((vertices + 63) / 64, 0);
+            if (head_size < vertices)
+                head.reset(new std::uint32_t[head_size = vertices]);
+            const std::size_t base = offsets[first];
+            if (link_size < offsets[last] - base)
+                link.reset(new Link[link_size = offsets[last] - base]);
+            for (std::size_t k = last; k-- > first;) {
+                const std::vector<Index>& vertex = candidates[k].vertices;
+                const unsigned char* flag = inside.data() + offsets[k];
+                const Index other = candidates[k].other;
+                for (std::size_t i = 0; i < vertex.size(); ++i) {
+                    if (!flag[i])
+                        continue;
+                    const auto v = static_cast<std::size_t>(vertex[i]);
+                    std::uint64_t& word = marked[v / 64];
+                    const std::uint64_t bit = std::uint64_t{1} << (v % 64);
+                    const auto slot = static_cast<std::uint32_t>(offsets[k] + i - base);
+                    link[slot] = {(word & bit) != 0 ? head[v] : NONE, other};
+                    head[v] = slot;
+                    word |= bit;
                 }
-                for (std::size_t v = 0; v < vertices; ++v)
-                    start[v + 1] += start[v];
-                for (std::size_t k = first; k < last; ++k) { // others ascending: stable within a vertex
-                    const std::vector<Index>& vertex = candidates[k].vertices;
-                    const unsigned char* flag = inside.data() + offsets[k];
-                    for (std::size_t i = 0; i < vertex.size(); ++i)
-                        if (flag[i])
-                            emit(out[start[static_cast<std::size_t>(vertex[i])]++], offsets[k] + i, vertex[i],
-                                 candidates[k].other);
-                }
-            } else {
-                keys.clear();
-                for (std::size_t k = first; k < last; ++k)
-                    for (std::size_t i = offsets[k]; i < offsets[k + 1]; ++i)
-                        if (inside[i])
-                            keys.emplace_back((static_cast<std::uint64_t>(candidates[k].vertices[i - offsets[k]]) << 32) |
-                                                  static_cast<std::uint32_t>(candidates[k].other),
-                                              i);
-                std::sort(keys.begin(), keys.end());
-                for (const auto& [key, i] : keys)
-                    emit(*out++, i, static_cast<Index>(key >> 32), static_cast<Index>(key & 0xffffffffU));
             }
+            ContactPoint* out = points.data() + output;
+            const auto for_each_slot = [&](const auto& emit) {
+                for (std::size_t w = 0; w < marked.size(); ++w)
+                    for (std::uint64_t bits = marked[w]; bits != 0; bits &= bits - 1) {
+                        const std::size_t v = 64 * w + static_cast<std::size_t>(__builtin_ctzll(bits));
+                        for (std::uint32_t slot = head[v]; slot != NONE; slot = link[slot].next)
+                            emit(*out++, static_cast<Index>(v), slot);
+                    }
+            };
+            if (!slots.empty())
+                for_each_slot([&](ContactPoint& point, Index, std::uint32_t slot) { point = slots[base + slot]; });
+            else
+                for_each_slot([&](ContactPoint& point, Index v, std::uint32_t slot) {
+                    point.body = body;
+                    point.vertex = v;
+                    point.other = link[slot].other;
+                });
         }
     });
     return points;
