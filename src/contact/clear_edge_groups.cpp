@@ -2,7 +2,9 @@
 
 #include "segment_triangle.hpp"
 
+#include <algorithm>
 #include <cmath>
+#include <vector>
 
 namespace coro {
 
@@ -16,6 +18,32 @@ constexpr Index UNGROUPED = -1;
 // Queue places between a vertex whose edges are prefetched and the vertex being expanded.
 constexpr std::size_t PREFETCH_AHEAD = 8;
 
+// Per-thread arrays kept from call to call (the grouping starts no tasks, so a thread runs one
+// call at a time), instead of allocating and filling two arrays the size of the whole surface in
+// every call while only a band of it is paired. Between calls, paired_id holds −1 everywhere: a
+// call resets the entries of its pairs. And state holds no UNGROUPED: a call sets its candidates
+// to UNGROUPED and the search puts each in a group; any other value stops the search as
+// NOT_CANDIDATE does, so stale groups need no reset.
+struct Scratch {
+    std::vector<Index> paired_id; // by slot of this surface
+    std::vector<Index> state;     // by vertex
+    std::vector<Index> start, partners, next, queue;
+    std::vector<double> length_to; // by vertex, valid where grouped
+};
+
+thread_local Scratch scratch;
+
+// Resets the entries of paired_id that a call set, however it ends.
+struct PairedIdReset {
+    const std::vector<std::array<Index, 2>>& slot_pairs;
+    std::size_t mine;
+    ~PairedIdReset()
+    {
+        for (const auto& pair : slot_pairs)
+            scratch.paired_id[static_cast<std::size_t>(pair[mine])] = -1;
+    }
+};
+
 } // namespace
 
 Index AabbTree::clear_edge_groups(CRef<Positions> vertices, const AabbTree& other, CRef<Positions> other_vertices,
@@ -28,22 +56,37 @@ Index AabbTree::clear_edge_groups(CRef<Positions> vertices, const AabbTree& othe
     // The faces of `other` paired with each paired face of this surface (slots of both trees):
     // paired slots get dense ids, the partners of id j are partners[start[j], start[j + 1]).
     const auto mine = static_cast<std::size_t>(column), theirs = 1 - mine;
-    std::vector<Index> paired_id(m_order.size(), -1);
-    std::vector<Index> start(1, 0);
-    start.reserve(slot_pairs.size() + 1);
+    if (scratch.paired_id.size() < m_order.size())
+        scratch.paired_id.resize(m_order.size(), -1);
+    const std::size_t vertex_count = m_edge_start.empty() ? 0 : m_edge_start.size() - 1;
+    if (scratch.state.size() < vertex_count)
+        scratch.state.resize(vertex_count, NOT_CANDIDATE);
+    const PairedIdReset reset{slot_pairs, mine};
+    // Raw pointers into the thread's arrays: through the vectors, every store or call in the
+    // loops below made the compiler load their data pointers again.
+    Index* const paired_id = scratch.paired_id.data();
+    if (scratch.start.size() < slot_pairs.size() + 1) {
+        scratch.start.resize(slot_pairs.size() + 1);
+        scratch.next.resize(slot_pairs.size());
+        scratch.partners.resize(slot_pairs.size());
+    }
+    Index* const start = scratch.start.data();
+    Index* const partners = scratch.partners.data();
+    std::size_t ids = 0;
+    start[0] = 0;
     for (const auto& pair : slot_pairs) {
         Index& id = paired_id[static_cast<std::size_t>(pair[mine])];
         if (id < 0) {
-            id = static_cast<Index>(start.size() - 1);
-            start.push_back(0);
+            id = static_cast<Index>(ids++);
+            start[ids] = 0;
         }
         ++start[static_cast<std::size_t>(id) + 1];
     }
-    for (std::size_t j = 1; j < start.size(); ++j)
+    for (std::size_t j = 1; j <= ids; ++j)
         start[j] += start[j - 1];
-    std::vector<Index> partners(slot_pairs.size());
     {
-        std::vector<Index> next(start.begin(), start.end() - 1);
+        Index* const next = scratch.next.data();
+        std::copy(start, start + ids, next);
         for (const auto& pair : slot_pairs) {
             const Index id = paired_id[static_cast<std::size_t>(pair[mine])];
             partners[static_cast<std::size_t>(next[static_cast<std::size_t>(id)]++)] = pair[theirs];
@@ -96,13 +139,15 @@ Index AabbTree::clear_edge_groups(CRef<Positions> vertices, const AabbTree& othe
 
     // Breadth-first from each candidate not yet grouped, in the order given; the search works on
     // vertex numbers, one state per vertex of this surface.
-    std::vector<Index> state(m_edge_start.empty() ? 0 : m_edge_start.size() - 1, NOT_CANDIDATE);
+    Index* const state = scratch.state.data();
     for (const Index v : candidates)
         state[static_cast<std::size_t>(v)] = UNGROUPED;
-    std::vector<double> length_to; // by vertex, when a path is wanted
-    if (path)
-        length_to.resize(state.size());
-    std::vector<Index> queue(n);
+    if (path && scratch.length_to.size() < vertex_count) // when a path is wanted
+        scratch.length_to.resize(vertex_count);
+    double* const length_to = scratch.length_to.data();
+    if (scratch.queue.size() < n)
+        scratch.queue.resize(n);
+    Index* const queue = scratch.queue.data();
     Index groups = 0;
     for (std::size_t i = 0; i < n; ++i) {
         const Index first = candidates[i];

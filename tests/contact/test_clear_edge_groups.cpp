@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <array>
+#include <thread>
 #include <vector>
 
 using namespace coro;
@@ -171,6 +172,42 @@ TEST(ClearEdgeGroups, GroupsAgreeWithWindingNumbersOnATwistedBarThroughATorus)
     const ContactSurface b = surface_of(bar, "bar");
     EXPECT_GE(expect_groups_agree_with_winding_numbers(b, torus), 3); // out, in, out, in, out
     EXPECT_GE(expect_groups_agree_with_winding_numbers(torus, b), 2);
+}
+
+TEST(ClearEdgeGroups, GroupsDoNotDependOnEarlierCalls)
+{
+    // The grouping keeps per-thread arrays from call to call: a call after others, on other trees
+    // and over larger regions, gives what it gives on a thread of its own.
+    const ContactSurface a = deformed_ball(Vec3::Zero(), 1.0, 10, 0.06, "a");
+    const ContactSurface b = deformed_ball(Vec3(0.7, 0.1, -0.05), 0.9, 9, 0.05, "b");
+    const Aabb small{Vec3(0.3, 0.3, -0.4), Vec3(0.9, 1.0, 0.4)};
+    struct Groups {
+        std::vector<Index> decider;
+        std::vector<double> path;
+    };
+    const auto groups = [](const ContactSurface& s, const ContactSurface& other, const Aabb& region) {
+        std::vector<Index> candidates;
+        s.tree.vertices_in_box(s.vertices, region, candidates);
+        Pairs pairs;
+        s.tree.overlapping_slots(other.tree, region, pairs);
+        Groups g;
+        s.tree.clear_edge_groups(s.vertices, other.tree, other.vertices, pairs, 0, candidates, g.decider, &g.path);
+        return g;
+    };
+    // Each call on a thread of its own, then all on this one, one after the other.
+    const Aabb overlap = a.tree.bounds().intersection(b.tree.bounds());
+    const std::array<std::array<const ContactSurface*, 2>, 3> calls{{{&b, &a}, {&a, &b}, {&a, &b}}};
+    const std::array<Aabb, 3> regions{overlap, overlap, small};
+    std::array<Groups, 3> alone;
+    for (std::size_t c = 0; c < calls.size(); ++c)
+        std::thread([&] { alone[c] = groups(*calls[c][0], *calls[c][1], regions[c]); }).join();
+    ASSERT_GT(alone[2].decider.size(), 20u);
+    ASSERT_LT(alone[2].decider.size(), alone[1].decider.size() / 2);
+    for (std::size_t c = 0; c < calls.size(); ++c) {
+        const Groups after = groups(*calls[c][0], *calls[c][1], regions[c]);
+        EXPECT_EQ(after.decider, alone[c].decider) << "call " << c;
+        EXPECT_EQ(after.path, alone[c].path) << "call " << c;
+    }
 }
 
 TEST(ClearEdgeGroups, VerticesOnTheOtherSurfaceStandAlone)
