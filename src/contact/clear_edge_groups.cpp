@@ -2,6 +2,10 @@
 
 #include "segment_triangle.hpp"
 
+#if defined(__AVX2__)
+#include <immintrin.h>
+#endif
+
 #include <algorithm>
 #include <cmath>
 #include <vector>
@@ -17,6 +21,47 @@ constexpr Index UNGROUPED = -1;
 
 // Queue places between a vertex whose edges are prefetched and the vertex being expanded.
 constexpr std::size_t PREFETCH_AHEAD = 8;
+
+/// The box of a segment [p, q], tested against face boxes (closed) without a branch per bound:
+/// which of six is the first to fail is hard to predict.
+class SegmentBox {
+public:
+    SegmentBox(const double* p, const double* q)
+    {
+#if defined(__AVX2__)
+        const __m256d a = _mm256_maskload_pd(p, xyz()), b = _mm256_maskload_pd(q, xyz());
+        m_lo = _mm256_min_pd(a, b);
+        m_hi = _mm256_max_pd(a, b);
+#else
+        for (int j = 0; j < 3; ++j) {
+            m_lo[j] = std::min(p[j], q[j]);
+            m_hi[j] = std::max(p[j], q[j]);
+        }
+#endif
+    }
+
+    bool misses(const Aabb& box) const
+    {
+#if defined(__AVX2__)
+        // The fourth lanes hold 0 on both sides: never a miss.
+        const __m256d min = _mm256_maskload_pd(box.min.data(), xyz());
+        const __m256d max = _mm256_maskload_pd(box.max.data(), xyz());
+        const __m256d miss = _mm256_or_pd(_mm256_cmp_pd(min, m_hi, _CMP_GT_OQ), _mm256_cmp_pd(max, m_lo, _CMP_LT_OQ));
+        return _mm256_movemask_pd(miss) != 0;
+#else
+        return (box.min[0] > m_hi[0]) | (box.min[1] > m_hi[1]) | (box.min[2] > m_hi[2]) | (box.max[0] < m_lo[0]) |
+               (box.max[1] < m_lo[1]) | (box.max[2] < m_lo[2]);
+#endif
+    }
+
+private:
+#if defined(__AVX2__)
+    static __m256i xyz() { return _mm256_setr_epi64x(-1, -1, -1, 0); } // 3 doubles: no load past them
+    __m256d m_lo, m_hi;
+#else
+    double m_lo[3], m_hi[3];
+#endif
+};
 
 // Per-thread arrays kept from call to call (the grouping starts no tasks, so a thread runs one
 // call at a time), instead of allocating and filling two arrays the size of the whole surface in
@@ -98,20 +143,16 @@ Index AabbTree::clear_edge_groups(CRef<Positions> vertices, const AabbTree& othe
     const double* other_data = other_vertices.data();
     const std::ptrdiff_t other_stride = other_vertices.outerStride();
     // A face of `other` that meets the edge meets the box of each face holding it: test the
-    // partners of the face with fewer (a face with none: the edge is clear).
-    const auto edge_clear = [&](Index u, Index v, const std::array<Index, 2>& slots) {
-        const Index id0 = paired_id[static_cast<std::size_t>(slots[0])];
-        const Index id1 = paired_id[static_cast<std::size_t>(slots[1])];
-        if (id0 < 0 || id1 < 0)
-            return true;
+    // partners of the face with fewer (a face with none: the edge is clear, below). Not inlined:
+    // in the search's loop over edges it made that loop spill registers.
+    const auto paired_edge_clear = [&](Index u, Index v, Index id0, Index id1) __attribute__((noinline)) {
         const auto count = [&](Index id) {
             return start[static_cast<std::size_t>(id) + 1] - start[static_cast<std::size_t>(id)];
         };
         const Index id = count(id0) <= count(id1) ? id0 : id1;
         const double* p = data + stride * u;
         const double* q = data + stride * v;
-        const double lo[3] = {std::min(p[0], q[0]), std::min(p[1], q[1]), std::min(p[2], q[2])};
-        const double hi[3] = {std::max(p[0], q[0]), std::max(p[1], q[1]), std::max(p[2], q[2])};
+        const SegmentBox segment_box(p, q);
         // The faces whose boxes meet the edge's are tested TRIANGLE_LANES at a time.
         const double* corner[3][detail::TRIANGLE_LANES];
         int taken = 0;
@@ -121,9 +162,7 @@ Index AabbTree::clear_edge_groups(CRef<Positions> vertices, const AabbTree& othe
         };
         for (Index k = start[static_cast<std::size_t>(id)]; k < start[static_cast<std::size_t>(id) + 1]; ++k) {
             const std::size_t g = static_cast<std::size_t>(partners[static_cast<std::size_t>(k)]);
-            const Aabb& fb = other.m_face_boxes[g];
-            if (fb.min[0] > hi[0] || fb.min[1] > hi[1] || fb.min[2] > hi[2] || fb.max[0] < lo[0] ||
-                fb.max[1] < lo[1] || fb.max[2] < lo[2])
+            if (segment_box.misses(other.m_face_boxes[g]))
                 continue;
             const Index* fv = &other.m_slot_vertices[3 * g];
             for (int c = 0; c < 3; ++c)
@@ -174,7 +213,12 @@ Index AabbTree::clear_edge_groups(CRef<Positions> vertices, const AabbTree& othe
             for (Index k = m_edge_start[static_cast<std::size_t>(u)]; k < end; ++k) {
                 const Index v = m_edge_vertex[static_cast<std::size_t>(k)];
                 Index& s = state[static_cast<std::size_t>(v)];
-                if (s != UNGROUPED || !edge_clear(u, v, m_edge_slots[static_cast<std::size_t>(k)]))
+                if (s != UNGROUPED)
+                    continue;
+                const std::array<Index, 2>& slots = m_edge_slots[static_cast<std::size_t>(k)];
+                const Index id0 = paired_id[static_cast<std::size_t>(slots[0])];
+                const Index id1 = paired_id[static_cast<std::size_t>(slots[1])];
+                if (id0 >= 0 && id1 >= 0 && !paired_edge_clear(u, v, id0, id1))
                     continue;
                 s = group;
                 queue[tail++] = v;
