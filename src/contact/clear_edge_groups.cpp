@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <type_traits>
 #include <vector>
 
 namespace coro {
@@ -187,54 +188,61 @@ Index AabbTree::clear_edge_groups(CRef<Positions> vertices, const AabbTree& othe
     if (scratch.queue.size() < n)
         scratch.queue.resize(n);
     Index* const queue = scratch.queue.data();
-    Index groups = 0;
-    for (std::size_t i = 0; i < n; ++i) {
-        const Index first = candidates[i];
-        if (state[static_cast<std::size_t>(first)] != UNGROUPED)
-            continue;
-        ++groups;
-        const auto group = static_cast<Index>(i);
-        state[static_cast<std::size_t>(first)] = group;
-        if (path)
-            length_to[static_cast<std::size_t>(first)] = 0.0;
-        std::size_t head = 0, tail = 0;
-        queue[tail++] = first;
-        while (head < tail) {
-            // The edges of consecutive vertices in the queue lie far apart in memory and are
-            // rarely cached at the start of a frame (the other work of a step evicts them), which
-            // made this pass wait on memory: the loads of the edges of a vertex a few places ahead
-            // start now, its m_edge_start entry having been prefetched when it was queued.
-            const Index ahead = queue[std::min(head + PREFETCH_AHEAD, tail - 1)];
-            const auto ahead_edges = static_cast<std::size_t>(m_edge_start[static_cast<std::size_t>(ahead)]);
-            __builtin_prefetch(m_edge_vertex.data() + ahead_edges); // may be one past the end
-            __builtin_prefetch(m_edge_slots.data() + ahead_edges);
-            const Index u = queue[head++];
-            const Index end = m_edge_start[static_cast<std::size_t>(u) + 1];
-            for (Index k = m_edge_start[static_cast<std::size_t>(u)]; k < end; ++k) {
-                const Index v = m_edge_vertex[static_cast<std::size_t>(k)];
-                Index& s = state[static_cast<std::size_t>(v)];
-                if (s != UNGROUPED)
-                    continue;
-                const std::array<Index, 2>& slots = m_edge_slots[static_cast<std::size_t>(k)];
-                const Index id0 = paired_id[static_cast<std::size_t>(slots[0])];
-                const Index id1 = paired_id[static_cast<std::size_t>(slots[1])];
-                if (id0 >= 0 && id1 >= 0 && !paired_edge_clear(u, v, id0, id1))
-                    continue;
-                s = group;
-                queue[tail++] = v;
-                __builtin_prefetch(&m_edge_start[static_cast<std::size_t>(v)]);
-                if (!path)
-                    continue;
-                // The sum rounded up by a relative 2⁻⁴⁰, far above the rounding of its terms.
-                const double* x = data + stride * u;
-                const double* y = data + stride * v;
-                const double length =
-                    std::sqrt((x[0] - y[0]) * (x[0] - y[0]) + (x[1] - y[1]) * (x[1] - y[1]) + (x[2] - y[2]) * (x[2] - y[2]));
-                length_to[static_cast<std::size_t>(v)] =
-                    (length_to[static_cast<std::size_t>(u)] + length) * (1.0 + 0x1p-40);
+    // The search with or without path lengths, compiled apart: the test of `path` in the loop
+    // over edges kept the lengths' loads and address arithmetic in it.
+    const auto search = [&](auto with_path) {
+        Index groups = 0;
+        for (std::size_t i = 0; i < n; ++i) {
+            const Index first = candidates[i];
+            if (state[static_cast<std::size_t>(first)] != UNGROUPED)
+                continue;
+            ++groups;
+            const auto group = static_cast<Index>(i);
+            state[static_cast<std::size_t>(first)] = group;
+            if constexpr (with_path)
+                length_to[static_cast<std::size_t>(first)] = 0.0;
+            std::size_t head = 0, tail = 0;
+            queue[tail++] = first;
+            while (head < tail) {
+                // The edges of consecutive vertices in the queue lie far apart in memory and are
+                // rarely cached at the start of a frame (the other work of a step evicts them),
+                // which made this pass wait on memory: the loads of the edges of a vertex a few
+                // places ahead start now, its m_edge_start entry having been prefetched when it
+                // was queued.
+                const Index ahead = queue[std::min(head + PREFETCH_AHEAD, tail - 1)];
+                const auto ahead_edges = static_cast<std::size_t>(m_edge_start[static_cast<std::size_t>(ahead)]);
+                __builtin_prefetch(m_edge_vertex.data() + ahead_edges); // may be one past the end
+                __builtin_prefetch(m_edge_slots.data() + ahead_edges);
+                const Index u = queue[head++];
+                const Index end = m_edge_start[static_cast<std::size_t>(u) + 1];
+                for (Index k = m_edge_start[static_cast<std::size_t>(u)]; k < end; ++k) {
+                    const Index v = m_edge_vertex[static_cast<std::size_t>(k)];
+                    Index& s = state[static_cast<std::size_t>(v)];
+                    if (s != UNGROUPED)
+                        continue;
+                    const std::array<Index, 2>& slots = m_edge_slots[static_cast<std::size_t>(k)];
+                    const Index id0 = paired_id[static_cast<std::size_t>(slots[0])];
+                    const Index id1 = paired_id[static_cast<std::size_t>(slots[1])];
+                    if (id0 >= 0 && id1 >= 0 && !paired_edge_clear(u, v, id0, id1))
+                        continue;
+                    s = group;
+                    queue[tail++] = v;
+                    __builtin_prefetch(&m_edge_start[static_cast<std::size_t>(v)]);
+                    if constexpr (with_path) {
+                        // The sum rounded up by a relative 2⁻⁴⁰, far above the rounding of its terms.
+                        const double* x = data + stride * u;
+                        const double* y = data + stride * v;
+                        const double length = std::sqrt((x[0] - y[0]) * (x[0] - y[0]) + (x[1] - y[1]) * (x[1] - y[1]) +
+                                                        (x[2] - y[2]) * (x[2] - y[2]));
+                        length_to[static_cast<std::size_t>(v)] =
+                            (length_to[static_cast<std::size_t>(u)] + length) * (1.0 + 0x1p-40);
+                    }
+                }
             }
         }
-    }
+        return groups;
+    };
+    const Index groups = path ? search(std::true_type{}) : search(std::false_type{});
     decider.resize(n);
     for (std::size_t i = 0; i < n; ++i)
         decider[i] = state[static_cast<std::size_t>(candidates[i])];
