@@ -222,21 +222,22 @@ void DetectionPass::take(std::size_t k, Index first, Index count, const GroupedA
     unsigned char* inside = m_inside.data() + m_offsets[k] + static_cast<std::size_t>(first);
     const Index* decider = answers.decider.data() + first;
     const InsideTest* answer = answers.answer.data();
-    Index on_surface = 0, fallbacks = 0, by_neighbour = 0, inside_count = 0;
+    Index on_surface = 0, fallbacks = 0, tested = 0, inside_count = 0;
     for (Index i = 0; i < count; ++i) {
         const InsideTest& result = answer[decider[i]];
-        const bool own = decider[i] == first + i;
-        on_surface += own && result.on_surface ? 1 : 0;
-        fallbacks += own && result.deciding_axis == 3 ? 1 : 0;
-        by_neighbour += own ? 0 : 1;
         inside[i] = result.inside ? 1 : 0;
         inside_count += result.inside ? 1 : 0;
+        if (decider[i] == first + i) { // few, where groups are shared: a branch rarely taken
+            ++tested;
+            on_surface += result.on_surface ? 1 : 0;
+            fallbacks += result.deciding_axis == 3 ? 1 : 0;
+        }
     }
     DetectionStats& counts = m_stats.local();
     counts.candidate_vertices += count;
     counts.on_surface += on_surface;
     counts.winding_fallbacks += fallbacks;
-    counts.by_neighbour += by_neighbour;
+    counts.by_neighbour += count - tested;
     counts.inside += inside_count;
     if (!m_contact_data)
         return;
