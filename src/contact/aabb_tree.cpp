@@ -6,6 +6,9 @@
 #include <tbb/parallel_for.h>
 
 #include <emmintrin.h>
+#if defined(__AVX2__)
+#include <immintrin.h>
+#endif
 
 #include <algorithm>
 #include <array>
@@ -259,12 +262,55 @@ void AabbTree::build_edges(std::size_t vertex_count)
 void AabbTree::refit_node(const double* data, std::ptrdiff_t stride, Index n)
 {
     WideNode& w = m_nodes[static_cast<std::size_t>(n)];
-    // SSE2: (x, y) in one register, z in the low half of another.
-    __m128d lo_xy = _mm_set1_pd(std::numeric_limits<double>::infinity()), lo_z = lo_xy;
-    __m128d hi_xy = _mm_set1_pd(-std::numeric_limits<double>::infinity()), hi_z = hi_xy;
     const __m128 abs_mask = _mm_castsi128_ps(_mm_set1_epi32(0x7fffffff));
     const __m128 ulp = _mm_set1_ps(0x1p-23f), tiny = _mm_set1_ps(0x1p-126f);
     alignas(16) float flo[4], fhi[4];
+#if defined(__AVX2__)
+    // AVX: (x, y, z, 0) in one register; a point or bound is 3 doubles, loaded without reading
+    // past them.
+    const __m256i xyz = _mm256_setr_epi64x(-1, -1, -1, 0);
+    __m256d lo = _mm256_set1_pd(std::numeric_limits<double>::infinity());
+    __m256d hi = _mm256_set1_pd(-std::numeric_limits<double>::infinity());
+    for (int k = 0; k < w.count; ++k) {
+        const Index c = w.child[k];
+        __m256d bl, bh;
+        if (c < 0) {
+            const std::size_t slot = static_cast<std::size_t>(-1 - c);
+            const Index* fv = &m_slot_vertices[3 * slot];
+            const __m256d a = _mm256_maskload_pd(data + stride * fv[0], xyz);
+            const __m256d b = _mm256_maskload_pd(data + stride * fv[1], xyz);
+            const __m256d d = _mm256_maskload_pd(data + stride * fv[2], xyz);
+            bl = _mm256_min_pd(_mm256_min_pd(a, b), d);
+            bh = _mm256_max_pd(_mm256_max_pd(a, b), d);
+            // min as four doubles (its fourth overwrites max[0]), then max as three.
+            Aabb& fb = m_face_boxes[slot];
+            _mm256_storeu_pd(fb.min.data(), bl);
+            _mm_storeu_pd(fb.max.data(), _mm256_castpd256_pd128(bh));
+            _mm_store_sd(fb.max.data() + 2, _mm256_extractf128_pd(bh, 1));
+        } else {
+            const Aabb& cb = m_node_boxes[static_cast<std::size_t>(c)];
+            bl = _mm256_maskload_pd(cb.min.data(), xyz);
+            bh = _mm256_maskload_pd(cb.max.data(), xyz);
+        }
+        lo = _mm256_min_pd(lo, bl);
+        hi = _mm256_max_pd(hi, bh);
+        // Outward float rounding (detail::float_down / float_up, three lanes at once).
+        const __m128 l = _mm256_cvtpd_ps(bl), h = _mm256_cvtpd_ps(bh);
+        _mm_store_ps(flo, _mm_sub_ps(l, _mm_add_ps(_mm_mul_ps(_mm_and_ps(l, abs_mask), ulp), tiny)));
+        _mm_store_ps(fhi, _mm_add_ps(h, _mm_add_ps(_mm_mul_ps(_mm_and_ps(h, abs_mask), ulp), tiny)));
+        for (int j = 0; j < 3; ++j) {
+            w.lo[j][k] = flo[j];
+            w.hi[j][k] = fhi[j];
+        }
+    }
+    Aabb& nb = m_node_boxes[static_cast<std::size_t>(n)];
+    _mm256_storeu_pd(nb.min.data(), lo);
+    _mm_storeu_pd(nb.max.data(), _mm256_castpd256_pd128(hi));
+    _mm_store_sd(nb.max.data() + 2, _mm256_extractf128_pd(hi, 1));
+#else
+    // SSE2: (x, y) in one register, z in the low half of another.
+    __m128d lo_xy = _mm_set1_pd(std::numeric_limits<double>::infinity()), lo_z = lo_xy;
+    __m128d hi_xy = _mm_set1_pd(-std::numeric_limits<double>::infinity()), hi_z = hi_xy;
     for (int k = 0; k < w.count; ++k) {
         const Index c = w.child[k];
         __m128d bl_xy, bl_z, bh_xy, bh_z;
@@ -311,6 +357,7 @@ void AabbTree::refit_node(const double* data, std::ptrdiff_t stride, Index n)
     _mm_store_sd(nb.min.data() + 2, lo_z);
     _mm_storeu_pd(nb.max.data(), hi_xy);
     _mm_store_sd(nb.max.data() + 2, hi_z);
+#endif
 }
 
 void AabbTree::refit_range(const double* data, std::ptrdiff_t stride, Index first, Index last)
