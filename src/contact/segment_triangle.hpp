@@ -121,23 +121,21 @@ inline Signs volume(const __m256d* r, const __m256d* x, const __m256d* y)
 
 /// segment_misses_triangle(p, q, a[k], b[k], c[k]) for triangles k < count ≤ TRIANGLE_LANES at
 /// once: bit k of the result is its answer (the same signs and bounds, evaluated in the four
-/// lanes of AVX2 registers where the build has them).
-inline int segment_misses_triangles(const double* p, const double* q, const double* const* a,
-                                    const double* const* b, const double* const* c, int count)
+/// lanes of AVX2 registers where the build has them). a, b and c hold TRIANGLE_LANES entries:
+/// those from `count` on are set to entry 0 (unused lanes repeat triangle 0).
+inline int segment_misses_triangles(const double* p, const double* q, const double** a, const double** b,
+                                    const double** c, int count)
 {
 #if defined(__AVX2__)
-    // Unused lanes repeat triangle 0.
-    const double* corner[3][TRIANGLE_LANES];
-    for (int k = 0; k < TRIANGLE_LANES; ++k) {
-        const int from = k < count ? k : 0;
-        corner[0][k] = a[from];
-        corner[1][k] = b[from];
-        corner[2][k] = c[from];
+    for (int k = count; k < TRIANGLE_LANES; ++k) {
+        a[k] = a[0];
+        b[k] = b[0];
+        c[k] = c[0];
     }
     __m256d A[3], B[3], C[3];
-    lanes::transpose(corner[0], A[0], A[1], A[2]);
-    lanes::transpose(corner[1], B[0], B[1], B[2]);
-    lanes::transpose(corner[2], C[0], C[1], C[2]);
+    lanes::transpose(a, A[0], A[1], A[2]);
+    lanes::transpose(b, B[0], B[1], B[2]);
+    lanes::transpose(c, C[0], C[1], C[2]);
     // Plane side (as face_normal and the side of segment_misses_triangle).
     __m256d n[3], permanent[3];
     {
