@@ -259,6 +259,10 @@ void AabbTree::build_edges(std::size_t vertex_count)
         }
 }
 
+// refit_node stores a box's min as four doubles, the fourth landing on max[0].
+static_assert(sizeof(Aabb) == 6 * sizeof(double) && sizeof(Vec3) == 3 * sizeof(double),
+              "Aabb is min then max, three doubles each, nothing between");
+
 void AabbTree::refit_node(const double* data, std::ptrdiff_t stride, Index n)
 {
     WideNode& w = m_nodes[static_cast<std::size_t>(n)];
@@ -282,7 +286,8 @@ void AabbTree::refit_node(const double* data, std::ptrdiff_t stride, Index n)
             const __m256d d = _mm256_maskload_pd(data + stride * fv[2], xyz);
             bl = _mm256_min_pd(_mm256_min_pd(a, b), d);
             bh = _mm256_max_pd(_mm256_max_pd(a, b), d);
-            // min as four doubles (its fourth overwrites max[0]), then max as three.
+            // min as four doubles (its fourth overwrites max[0], which follows it), then max as
+            // three.
             Aabb& fb = m_face_boxes[slot];
             _mm256_storeu_pd(fb.min.data(), bl);
             _mm_storeu_pd(fb.max.data(), _mm256_castpd256_pd128(bh));

@@ -31,8 +31,8 @@ public:
     {
 #if defined(__AVX2__)
         const __m256d a = _mm256_maskload_pd(p, xyz()), b = _mm256_maskload_pd(q, xyz());
-        m_lo = _mm256_min_pd(a, b);
-        m_hi = _mm256_max_pd(a, b);
+        m_lo = _mm256_min_pd(b, a); // as std::min(p, q) and std::max(p, q), NaN included
+        m_hi = _mm256_max_pd(b, a);
 #else
         for (int j = 0; j < 3; ++j) {
             m_lo[j] = std::min(p[j], q[j]);
@@ -64,11 +64,12 @@ private:
 #endif
 };
 
-// Per-thread arrays kept from call to call (the grouping starts no tasks, so a thread runs one
-// call at a time), instead of allocating and filling two arrays the size of the whole surface in
-// every call while only a band of it is paired. Between calls, paired_id holds −1 everywhere: a
-// call resets the entries of its pairs. And state holds no UNGROUPED: a call sets its candidates
-// to UNGROUPED and the search puts each in a group; any other value stops the search as
+// Per-thread arrays kept from call to call, as large as the largest surface the thread has
+// grouped (the grouping starts no tasks, so a thread runs one call at a time), instead of
+// allocating and filling two arrays the size of the whole surface in every call while only a
+// band of it is paired. Between calls, paired_id holds −1 everywhere: a call resets the entries
+// of its pairs. And state holds no UNGROUPED: a call sets its candidates to UNGROUPED (after
+// every allocation) and the search puts each in a group; any other value stops the search as
 // NOT_CANDIDATE does, so stale groups need no reset.
 struct Scratch {
     std::vector<Index> paired_id; // by slot of this surface
@@ -107,15 +108,26 @@ Index AabbTree::clear_edge_groups(CRef<Positions> vertices, const AabbTree& othe
     const std::size_t vertex_count = m_edge_start.empty() ? 0 : m_edge_start.size() - 1;
     if (scratch.state.size() < vertex_count)
         scratch.state.resize(vertex_count, NOT_CANDIDATE);
+    // Every array sized before any entry is set, so that a failed allocation leaves the
+    // invariants below intact.
+    if (scratch.start.size() < slot_pairs.size() + 1)
+        scratch.start.resize(slot_pairs.size() + 1);
+    if (scratch.next.size() < slot_pairs.size())
+        scratch.next.resize(slot_pairs.size());
+    if (scratch.partners.size() < slot_pairs.size())
+        scratch.partners.resize(slot_pairs.size());
+    if (path && scratch.length_to.size() < vertex_count) // when a path is wanted
+        scratch.length_to.resize(vertex_count);
+    if (scratch.queue.size() < n)
+        scratch.queue.resize(n);
+    decider.resize(n);
+    if (path)
+        path->resize(n);
     const PairedIdReset reset{slot_pairs, mine};
     // Raw pointers into the thread's arrays: through the vectors, every store or call in the
     // loops below made the compiler load their data pointers again.
     Index* const paired_id = scratch.paired_id.data();
-    if (scratch.start.size() < slot_pairs.size() + 1) {
-        scratch.start.resize(slot_pairs.size() + 1);
-        scratch.next.resize(slot_pairs.size());
-        scratch.partners.resize(slot_pairs.size());
-    }
+
     Index* const start = scratch.start.data();
     Index* const partners = scratch.partners.data();
     std::size_t ids = 0;
@@ -182,11 +194,7 @@ Index AabbTree::clear_edge_groups(CRef<Positions> vertices, const AabbTree& othe
     Index* const state = scratch.state.data();
     for (const Index v : candidates)
         state[static_cast<std::size_t>(v)] = UNGROUPED;
-    if (path && scratch.length_to.size() < vertex_count) // when a path is wanted
-        scratch.length_to.resize(vertex_count);
     double* const length_to = scratch.length_to.data();
-    if (scratch.queue.size() < n)
-        scratch.queue.resize(n);
     Index* const queue = scratch.queue.data();
     // The search with or without path lengths, compiled apart: the test of `path` in the loop
     // over edges kept the lengths' loads and address arithmetic in it.
@@ -243,11 +251,9 @@ Index AabbTree::clear_edge_groups(CRef<Positions> vertices, const AabbTree& othe
         return groups;
     };
     const Index groups = path ? search(std::true_type{}) : search(std::false_type{});
-    decider.resize(n);
     for (std::size_t i = 0; i < n; ++i)
         decider[i] = state[static_cast<std::size_t>(candidates[i])];
     if (path) {
-        path->resize(n);
         for (std::size_t i = 0; i < n; ++i)
             (*path)[i] = length_to[static_cast<std::size_t>(candidates[i])];
     }

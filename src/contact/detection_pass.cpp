@@ -241,7 +241,7 @@ void DetectionPass::take(std::size_t k, Index first, Index count, const GroupedA
     counts.inside += inside_count;
     if (!m_contact_data)
         return;
-    CORO_ASSERT(!m_nearest);
+    CORO_ASSERT(!m_nearest && answers.path.size() == answers.decider.size()); // distance bounds wanted
     ContactPoint* slots = m_slots.data() + m_offsets[k] + static_cast<std::size_t>(first);
     Index hint_face = -1; // as in take() above
     for (Index i = 0; i < count; ++i) {

@@ -34,9 +34,9 @@ std::vector<SlotPairs> overlapping_slot_pairs(const std::vector<ContactSurface>&
 /// candidates[k].vertices, called once per pair from that pair's TBB task (pairs run in parallel;
 /// `use` may start nested tasks). Where the other surface is closed, the candidates of a pair are
 /// grouped by AabbTree::clear_edge_groups and only the first of each group is tested
-/// (inside_tests()); the others share its answer (see InsideTest DECIDED_BY_NEIGHBOUR and
-/// shared_distance_bound()). Else every candidate is tested. The tests of a pair with many groups
-/// run in nested tasks; the answers do not depend on the scheduling.
+/// (inside_tests()); the others share its answer, with shared_distance_bound() as theirs. Else
+/// every candidate is tested. The tests of a pair with many groups run in nested tasks; the
+/// answers do not depend on the scheduling.
 /// @param[in] slot_pairs  overlapping_slot_pairs() of the pairs (body < other) of `candidates`,
 ///                        in their order
 void grouped_inside_tests(const std::vector<ContactSurface>& surfaces, const std::vector<PairCandidates>& candidates,

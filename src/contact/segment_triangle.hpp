@@ -121,8 +121,8 @@ inline Signs volume(const __m256d* r, const __m256d* x, const __m256d* y)
 
 /// segment_misses_triangle(p, q, a[k], b[k], c[k]) for triangles k < count ≤ TRIANGLE_LANES at
 /// once: bit k of the result is its answer (the same signs and bounds, evaluated in the four
-/// lanes of AVX2 registers where the build has them). a, b and c hold TRIANGLE_LANES entries:
-/// those from `count` on are set to entry 0 (unused lanes repeat triangle 0).
+/// lanes of AVX2 registers where the build has them), 1 ≤ count. a, b and c hold TRIANGLE_LANES
+/// entries; with AVX2 those from `count` on are set to entry 0 (unused lanes repeat triangle 0).
 inline int segment_misses_triangles(const double* p, const double* q, const double** a, const double** b,
                                     const double** c, int count)
 {

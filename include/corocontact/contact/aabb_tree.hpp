@@ -141,7 +141,8 @@ public:
     /// closed surface. An edge is clear when one of its faces is in no pair of `slot_pairs`, or
     /// when each face of `other` paired with it whose box meets the edge's is shown to miss the
     /// edge by signs beyond their rounding (as segment_clear). A vertex on `other`'s surface
-    /// meets a face with every edge, so it is a group of its own.
+    /// meets a face with every edge, so it is a group of its own. Keeps its working arrays per
+    /// thread between calls (as large as the largest surface the thread has grouped).
     /// @param[in] vertices        this surface's positions (last build or refit)
     /// @param[in] other_vertices  `other`'s positions (last build or refit)
     /// @param[in] slot_pairs      overlapping_slots() of the two trees over a region holding

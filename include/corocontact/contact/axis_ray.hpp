@@ -70,7 +70,7 @@ struct InsideTest {
     bool inside = false;
     /// 0..2, or 3 for the winding-number fallback, −1: no axis hit; DECIDED_BY_NEIGHBOUR: the
     /// answer of another point joined to it by segments that meet no face (inside_tests_shared():
-    /// an empty cube or AabbTree::segment_clear; the detector: AabbTree::clear_edge_groups)
+    /// an empty cube or AabbTree::segment_clear)
     int deciding_axis = -1;
     bool on_surface = false;       ///< exact modes: the point lies on the surface (then not inside)
     /// Exact modes, decided by an axis: the distance along that axis to the closest clean face
@@ -81,8 +81,8 @@ struct InsideTest {
     Index crossing_face = -1;
 };
 
-/// InsideTest::deciding_axis of a point that took a neighbour's answer (inside_tests_shared(),
-/// the detector's clear-edge groups).
+/// InsideTest::deciding_axis of a point that took a neighbour's answer (inside_tests_shared();
+/// the detector's clear-edge groups count theirs in DetectionStats::by_neighbour).
 constexpr int DECIDED_BY_NEIGHBOUR = 4;
 
 /// Paper mode: axes x, y, z until one has a hit (INSIDE or OUTSIDE); no hit on all three ⇒
