@@ -268,7 +268,17 @@ void AabbTree::refit_node(const double* data, std::ptrdiff_t stride, Index n)
     WideNode& w = m_nodes[static_cast<std::size_t>(n)];
     const __m128 abs_mask = _mm_castsi128_ps(_mm_set1_epi32(0x7fffffff));
     const __m128 ulp = _mm_set1_ps(0x1p-23f), tiny = _mm_set1_ps(0x1p-126f);
-    alignas(16) float flo[4], fhi[4];
+    // Lane k of the node: the box (l, h), x, y, z in lanes 0..2, rounded outward to floats
+    // (detail::float_down / float_up, three lanes at once).
+    const auto set_lane = [&](int k, __m128 l, __m128 h) {
+        alignas(16) float flo[4], fhi[4];
+        _mm_store_ps(flo, _mm_sub_ps(l, _mm_add_ps(_mm_mul_ps(_mm_and_ps(l, abs_mask), ulp), tiny)));
+        _mm_store_ps(fhi, _mm_add_ps(h, _mm_add_ps(_mm_mul_ps(_mm_and_ps(h, abs_mask), ulp), tiny)));
+        for (int j = 0; j < 3; ++j) {
+            w.lo[j][k] = flo[j];
+            w.hi[j][k] = fhi[j];
+        }
+    };
 #if defined(__AVX2__)
     // AVX: (x, y, z, 0) in one register; a point or bound is 3 doubles, loaded without reading
     // past them.
@@ -299,14 +309,7 @@ void AabbTree::refit_node(const double* data, std::ptrdiff_t stride, Index n)
         }
         lo = _mm256_min_pd(lo, bl);
         hi = _mm256_max_pd(hi, bh);
-        // Outward float rounding (detail::float_down / float_up, three lanes at once).
-        const __m128 l = _mm256_cvtpd_ps(bl), h = _mm256_cvtpd_ps(bh);
-        _mm_store_ps(flo, _mm_sub_ps(l, _mm_add_ps(_mm_mul_ps(_mm_and_ps(l, abs_mask), ulp), tiny)));
-        _mm_store_ps(fhi, _mm_add_ps(h, _mm_add_ps(_mm_mul_ps(_mm_and_ps(h, abs_mask), ulp), tiny)));
-        for (int j = 0; j < 3; ++j) {
-            w.lo[j][k] = flo[j];
-            w.hi[j][k] = fhi[j];
-        }
+        set_lane(k, _mm256_cvtpd_ps(bl), _mm256_cvtpd_ps(bh));
     }
     Aabb& nb = m_node_boxes[static_cast<std::size_t>(n)];
     _mm256_storeu_pd(nb.min.data(), lo);
@@ -347,15 +350,8 @@ void AabbTree::refit_node(const double* data, std::ptrdiff_t stride, Index n)
         lo_z = _mm_min_sd(lo_z, bl_z);
         hi_xy = _mm_max_pd(hi_xy, bh_xy);
         hi_z = _mm_max_sd(hi_z, bh_z);
-        // Outward float rounding (detail::float_down / float_up, three lanes at once).
-        const __m128 l = _mm_movelh_ps(_mm_cvtpd_ps(bl_xy), _mm_cvtpd_ps(bl_z));
-        const __m128 h = _mm_movelh_ps(_mm_cvtpd_ps(bh_xy), _mm_cvtpd_ps(bh_z));
-        _mm_store_ps(flo, _mm_sub_ps(l, _mm_add_ps(_mm_mul_ps(_mm_and_ps(l, abs_mask), ulp), tiny)));
-        _mm_store_ps(fhi, _mm_add_ps(h, _mm_add_ps(_mm_mul_ps(_mm_and_ps(h, abs_mask), ulp), tiny)));
-        for (int j = 0; j < 3; ++j) {
-            w.lo[j][k] = flo[j];
-            w.hi[j][k] = fhi[j];
-        }
+        set_lane(k, _mm_movelh_ps(_mm_cvtpd_ps(bl_xy), _mm_cvtpd_ps(bl_z)),
+                 _mm_movelh_ps(_mm_cvtpd_ps(bh_xy), _mm_cvtpd_ps(bh_z)));
     }
     Aabb& nb = m_node_boxes[static_cast<std::size_t>(n)];
     _mm_storeu_pd(nb.min.data(), lo_xy);
