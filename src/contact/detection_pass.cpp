@@ -22,86 +22,78 @@ constexpr std::uint32_t NONE = ~std::uint32_t{0};
 /// heads a chain of its slots, linked from the body's last pair back so that it runs by other
 /// ascending; the marks are then read in order: O(points + candidates + vertices / 64). `slots`
 /// holds each inside slot's point with its depth and normal; empty: the points carry body,
-/// vertex and other only. The bodies are TBB tasks, each writing its own range of the output.
+/// vertex and other only. Each point is written once, appended in order: a vector sized first
+/// and filled by tasks wrote every point twice (its default, then its value), which cost more
+/// than the tasks saved.
 std::vector<ContactPoint> sorted_points(const std::vector<ContactSurface>& surfaces,
                                         const std::vector<PairCandidates>& candidates,
                                         const std::vector<std::size_t>& offsets, const std::vector<ContactPoint>& slots,
                                         const std::vector<unsigned char>& inside)
 {
-    // Each body's pairs first .. last − 1 and the start of its points in the output.
-    struct BodyRange {
-        std::size_t first, last, output;
-    };
-    std::vector<BodyRange> bodies;
-    std::size_t total = 0;
-    for (std::size_t first = 0; first < candidates.size();) {
-        std::size_t last = first, count = 0;
-        for (; last < candidates.size() && candidates[last].body == candidates[first].body; ++last)
-            for (std::size_t i = offsets[last]; i < offsets[last + 1]; ++i)
-                count += inside[i];
-        bodies.push_back({first, last, total});
-        total += count;
-        first = last;
-    }
     CORO_ASSERT(offsets.back() < NONE);
-    std::vector<ContactPoint> points(total);
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, bodies.size(), 1), [&](const tbb::blocked_range<std::size_t>& r) {
-        // A link of a chain: the next slot of the same vertex (NONE: the last) and its other body,
-        // by slot − the body's first slot. Neither the links nor the heads are initialised: only
-        // those of inside slots and of marked vertices are read.
-        struct Link {
-            std::uint32_t next;
-            Index other;
-        };
-        std::vector<std::uint64_t> marked;
-        std::unique_ptr<std::uint32_t[]> head;
-        std::unique_ptr<Link[]> link;
-        std::size_t head_size = 0, link_size = 0;
-        for (std::size_t j = r.begin(); j < r.end(); ++j) {
-            const auto [first, last, output] = bodies[j];
-            const Index body = candidates[first].body;
-            const auto vertices = static_cast<std::size_t>(surfaces[static_cast<std::size_t>(body)].vertices.rows());
-            marked.assign((vertices + 63) / 64, 0);
-            if (head_size < vertices)
-                head.reset(new std::uint32_t[head_size = vertices]);
-            const std::size_t base = offsets[first];
-            if (link_size < offsets[last] - base)
-                link.reset(new Link[link_size = offsets[last] - base]);
-            for (std::size_t k = last; k-- > first;) {
-                const std::vector<Index>& vertex = candidates[k].vertices;
-                const unsigned char* flag = inside.data() + offsets[k];
-                const Index other = candidates[k].other;
-                for (std::size_t i = 0; i < vertex.size(); ++i) {
-                    if (!flag[i])
-                        continue;
-                    const auto v = static_cast<std::size_t>(vertex[i]);
-                    std::uint64_t& word = marked[v / 64];
-                    const std::uint64_t bit = std::uint64_t{1} << (v % 64);
-                    const auto slot = static_cast<std::uint32_t>(offsets[k] + i - base);
-                    link[slot] = {(word & bit) != 0 ? head[v] : NONE, other};
-                    head[v] = slot;
-                    word |= bit;
-                }
+    std::size_t total = 0;
+    for (const unsigned char flag : inside)
+        total += flag;
+    std::vector<ContactPoint> points;
+    points.reserve(total);
+    // A link of a chain: the next slot of the same vertex (NONE: the last) and its other body, by
+    // slot − the body's first slot. Neither the links nor the heads are initialised: only those of
+    // inside slots and of marked vertices are read.
+    struct Link {
+        std::uint32_t next;
+        Index other;
+    };
+    std::vector<std::uint64_t> marked;
+    std::unique_ptr<std::uint32_t[]> head;
+    std::unique_ptr<Link[]> link;
+    std::size_t head_size = 0, link_size = 0;
+    for (std::size_t first = 0, last = 0; first < candidates.size(); first = last) {
+        const Index body = candidates[first].body;
+        while (last < candidates.size() && candidates[last].body == body)
+            ++last;
+        const auto vertices = static_cast<std::size_t>(surfaces[static_cast<std::size_t>(body)].vertices.rows());
+        marked.assign((vertices + 63) / 64, 0);
+        if (head_size < vertices)
+            head.reset(new std::uint32_t[head_size = vertices]);
+        const std::size_t base = offsets[first];
+        if (link_size < offsets[last] - base)
+            link.reset(new Link[link_size = offsets[last] - base]);
+        for (std::size_t k = last; k-- > first;) {
+            const std::vector<Index>& vertex = candidates[k].vertices;
+            const unsigned char* flag = inside.data() + offsets[k];
+            const Index other = candidates[k].other;
+            for (std::size_t i = 0; i < vertex.size(); ++i) {
+                if (!flag[i])
+                    continue;
+                const auto v = static_cast<std::size_t>(vertex[i]);
+                std::uint64_t& word = marked[v / 64];
+                const std::uint64_t bit = std::uint64_t{1} << (v % 64);
+                const auto slot = static_cast<std::uint32_t>(offsets[k] + i - base);
+                link[slot] = {(word & bit) != 0 ? head[v] : NONE, other};
+                head[v] = slot;
+                word |= bit;
             }
-            ContactPoint* out = points.data() + output;
-            const auto for_each_slot = [&](const auto& emit) {
-                for (std::size_t w = 0; w < marked.size(); ++w)
-                    for (std::uint64_t bits = marked[w]; bits != 0; bits &= bits - 1) {
-                        const std::size_t v = 64 * w + static_cast<std::size_t>(__builtin_ctzll(bits));
-                        for (std::uint32_t slot = head[v]; slot != NONE; slot = link[slot].next)
-                            emit(*out++, static_cast<Index>(v), slot);
-                    }
-            };
-            if (!slots.empty())
-                for_each_slot([&](ContactPoint& point, Index, std::uint32_t slot) { point = slots[base + slot]; });
-            else
-                for_each_slot([&](ContactPoint& point, Index v, std::uint32_t slot) {
-                    point.body = body;
-                    point.vertex = v;
-                    point.other = link[slot].other;
-                });
         }
-    });
+        const auto for_each_slot = [&](const auto& emit) {
+            for (std::size_t w = 0; w < marked.size(); ++w)
+                for (std::uint64_t bits = marked[w]; bits != 0; bits &= bits - 1) {
+                    const std::size_t v = 64 * w + static_cast<std::size_t>(__builtin_ctzll(bits));
+                    for (std::uint32_t slot = head[v]; slot != NONE; slot = link[slot].next)
+                        emit(static_cast<Index>(v), slot);
+                }
+        };
+        if (!slots.empty()) {
+            for_each_slot([&](Index, std::uint32_t slot) { points.push_back(slots[base + slot]); });
+        } else {
+            for_each_slot([&](Index v, std::uint32_t slot) {
+                ContactPoint& point = points.emplace_back();
+                point.body = body;
+                point.vertex = v;
+                point.other = link[slot].other;
+            });
+        }
+    }
+    CORO_ASSERT(points.size() == total);
     return points;
 }
 
@@ -220,15 +212,16 @@ void DetectionPass::take(std::size_t k, Index first, Index count, const GroupedA
 {
     const PairCandidates& pair = m_candidates[k];
     unsigned char* inside = m_inside.data() + m_offsets[k] + static_cast<std::size_t>(first);
-    const Index* decider = answers.decider.data() + first;
+    const Index* group = answers.group.data() + first;
+    const Index* tested = answers.tested.data();
     const InsideTest* answer = answers.answer.data();
-    Index on_surface = 0, fallbacks = 0, tested = 0, inside_count = 0;
+    Index on_surface = 0, fallbacks = 0, tests = 0, inside_count = 0;
     for (Index i = 0; i < count; ++i) {
-        const InsideTest& result = answer[decider[i]];
+        const InsideTest& result = answer[group[i]];
         inside[i] = result.inside ? 1 : 0;
         inside_count += result.inside ? 1 : 0;
-        if (decider[i] == first + i) { // few, where groups are shared: a branch rarely taken
-            ++tested;
+        if (tested[group[i]] == first + i) { // few, where groups are shared: a branch rarely taken
+            ++tests;
             on_surface += result.on_surface ? 1 : 0;
             fallbacks += result.deciding_axis == 3 ? 1 : 0;
         }
@@ -237,19 +230,20 @@ void DetectionPass::take(std::size_t k, Index first, Index count, const GroupedA
     counts.candidate_vertices += count;
     counts.on_surface += on_surface;
     counts.winding_fallbacks += fallbacks;
-    counts.by_neighbour += count - tested;
+    counts.by_neighbour += count - tests;
     counts.inside += inside_count;
     if (!m_contact_data)
         return;
-    CORO_ASSERT(!m_nearest && answers.path.size() == answers.decider.size()); // distance bounds wanted
+    CORO_ASSERT(!m_nearest && answers.path.size() == answers.group.size()); // distance bounds wanted
     ContactPoint* slots = m_slots.data() + m_offsets[k] + static_cast<std::size_t>(first);
     Index hint_face = -1; // as in take() above
     for (Index i = 0; i < count; ++i) {
         if (!inside[i])
             continue;
         const auto c = static_cast<std::size_t>(first + i);
-        const double bound = decider[i] == first + i ? answer[c].surface_distance_bound
-                                                     : shared_distance_bound(answers, c);
+        const Index g = group[i];
+        const double bound = tested[g] == first + i ? answer[g].surface_distance_bound
+                                                    : shared_distance_bound(answers, c);
         slots[i] = contact_point(m_surfaces, pair.body, pair.vertices[c], pair.other, bound, hint_face);
         hint_face = slots[i].face;
     }

@@ -156,7 +156,7 @@ std::vector<ContactPoint> detect_contacts(const std::vector<ContactSurface>& sur
     detail::grouped_inside_tests(
         surfaces, candidates, slot_pairs, settings.tolerances, settings.contact_data,
         [&](std::size_t k, const detail::GroupedAnswers& answers) {
-            const auto n = static_cast<Index>(answers.decider.size());
+            const auto n = static_cast<Index>(answers.group.size());
             const Index blocks = (n + VERTEX_BLOCK - 1) / VERTEX_BLOCK;
             const auto take_block = [&](Index b) {
                 const Index first = b * VERTEX_BLOCK;

@@ -63,42 +63,49 @@ void grouped_inside_tests(const std::vector<ContactSurface>& surfaces, const std
     // nested tasks when there are many) and their use, where the rest of each group take them.
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, pairs, 1), [&](const tbb::blocked_range<std::size_t>& r) {
         GroupedAnswers answers;
-        std::vector<Index>& decider = answers.decider;
+        std::vector<Index>& group = answers.group;
+        std::vector<Index>& tested = answers.tested;
         std::vector<InsideTest>& answer = answers.answer;
-        std::vector<Index> tested;
         for (std::size_t k = r.begin(); k < r.end(); ++k) {
             const PairCandidates& pair = candidates[k];
             const ContactSurface& body = surfaces[static_cast<std::size_t>(pair.body)];
             const ContactSurface& other = surfaces[static_cast<std::size_t>(pair.other)];
             const std::size_t n = pair.vertices.size();
+            tested.clear();
             if (other.closed) {
+                // The groups by their first candidates (each first in its group, so a candidate's
+                // decider is renumbered before the candidate), numbered in that order.
                 body.tree.clear_edge_groups(body.vertices, other.tree, other.vertices, slot_pairs[pair_of[k]],
-                                            pair.body < pair.other ? 0 : 1, pair.vertices, decider,
+                                            pair.body < pair.other ? 0 : 1, pair.vertices, group,
                                             distance_bounds ? &answers.path : nullptr);
+                for (std::size_t i = 0; i < n; ++i) {
+                    const auto decider = static_cast<std::size_t>(group[i]);
+                    CORO_ASSERT(decider <= i);
+                    if (decider == i) {
+                        group[i] = static_cast<Index>(tested.size());
+                        tested.push_back(static_cast<Index>(i));
+                    } else {
+                        group[i] = group[decider];
+                    }
+                }
             } else {
-                decider.resize(n);
+                group.resize(n);
                 for (std::size_t i = 0; i < n; ++i)
-                    decider[i] = static_cast<Index>(i);
+                    group[i] = static_cast<Index>(i);
+                tested = group;
                 if (distance_bounds)
                     answers.path.assign(n, 0.0);
             }
-            tested.clear();
-            for (std::size_t i = 0; i < n; ++i)
-                if (decider[i] == static_cast<Index>(i))
-                    tested.push_back(static_cast<Index>(i));
 
-            answer.resize(n);
+            answer.resize(tested.size());
             const auto test_block = [&](std::size_t first, std::size_t last) {
                 Vec3 points[TEST_BLOCK];
-                InsideTest results[TEST_BLOCK];
                 const auto count = static_cast<Index>(last - first);
                 for (Index t = 0; t < count; ++t) {
                     const Index i = tested[first + static_cast<std::size_t>(t)];
                     points[t] = body.vertices.row(pair.vertices[static_cast<std::size_t>(i)]).transpose();
                 }
-                inside_tests(other, points, count, DetectionMode::EXACT, {}, tolerances, results);
-                for (Index t = 0; t < count; ++t)
-                    answer[static_cast<std::size_t>(tested[first + static_cast<std::size_t>(t)])] = results[t];
+                inside_tests(other, points, count, DetectionMode::EXACT, {}, tolerances, answer.data() + first);
             };
             if (tested.size() <= TEST_BLOCK) {
                 test_block(0, tested.size());

@@ -12,13 +12,16 @@
 
 namespace coro::detail {
 
-/// The exact-mode answers of one pair's candidates, by groups: candidate i takes the test of
-/// candidate decider[i] (decider[i] == i: its own), which is answer[decider[i]] (the entries of
-/// the others are not written). With distance bounds, path[i] is a length of a path of clear
-/// edges from candidate decider[i] to candidate i [m] (0 for a decider).
+/// The exact-mode answers of one pair's candidates, by groups: candidate i belongs to group
+/// group[i], whose first candidate tested[group[i]] was tested, with answer answer[group[i]]. Only
+/// the tested candidates have an entry in `answer` (an entry per candidate, each written with
+/// its default every frame, cost more than the few tests). With distance bounds, path[i] is a
+/// length of a path of clear edges from candidate tested[group[i]] to candidate i [m] (0 for a
+/// tested one).
 struct GroupedAnswers {
-    std::vector<Index> decider;     ///< size n (the pair's candidates)
-    std::vector<InsideTest> answer; ///< size n, valid where decider[i] == i
+    std::vector<Index> group;       ///< size n (the pair's candidates): 0 .. groups − 1
+    std::vector<Index> tested;      ///< size groups: each group's first candidate, ascending
+    std::vector<InsideTest> answer; ///< size groups: the test of candidate tested[g]
     std::vector<double> path;       ///< size n with distance bounds, else empty
 };
 
@@ -49,7 +52,7 @@ void grouped_inside_tests(const std::vector<ContactSurface>& surfaces, const std
 /// so some point of the surface lies within it [m].
 inline double shared_distance_bound(const GroupedAnswers& answers, std::size_t i)
 {
-    const InsideTest& from = answers.answer[static_cast<std::size_t>(answers.decider[i])];
+    const InsideTest& from = answers.answer[static_cast<std::size_t>(answers.group[i])];
     return (from.surface_distance_bound + answers.path[i]) * (1.0 + 1e-12);
 }
 
