@@ -15,6 +15,8 @@
 
 namespace coro {
 
+static_assert(sizeof(ContactPoint) == 72, "ContactPoint's documented layout: four indices, then seven doubles");
+
 namespace {
 
 using detail::DetectionPass;

@@ -11,13 +11,14 @@
 namespace coro {
 
 /// A surface vertex of one body found inside another body.
+/// The four indices come first: 72 bytes, no padding (a detection writes one per inside vertex).
 struct ContactPoint {
     Index body = -1;        ///< index of the body the vertex belongs to
     Index vertex = -1;      ///< surface vertex index in that body's ContactSurface
     Index other = -1;       ///< the body it is inside
+    Index face = -1;        ///< the other surface's face holding the nearest point
     double depth = 0.0;     ///< distance to the nearest point of the other surface [m], ≥ 0
     Vec3 normal = Vec3::Zero(); ///< outward unit normal of the other surface at that point
-    Index face = -1;        ///< the other surface's face holding the nearest point
     Vec3 barycentric = Vec3::Zero(); ///< nearest point's weights on that face
 };
 
