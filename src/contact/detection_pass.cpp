@@ -22,9 +22,9 @@ constexpr std::uint32_t NONE = ~std::uint32_t{0};
 /// heads a chain of its slots, linked from the body's last pair back so that it runs by other
 /// ascending; the marks are then read in order: O(points + candidates + vertices / 64). `slots`
 /// holds each inside slot's point with its depth and normal; empty: the points carry body,
-/// vertex and other only. Each point is written once, appended in order: a vector sized first
-/// and filled by tasks wrote every point twice (its default, then its value), which cost more
-/// than the tasks saved.
+/// vertex and other only. The points are appended in order, each built in place: a vector
+/// sized first (every point set to its defaults) and then filled by a task per body passed over
+/// the output twice, which cost more than the tasks saved on two bodies.
 std::vector<ContactPoint> sorted_points(const std::vector<ContactSurface>& surfaces,
                                         const std::vector<PairCandidates>& candidates,
                                         const std::vector<std::size_t>& offsets, const std::vector<ContactPoint>& slots,

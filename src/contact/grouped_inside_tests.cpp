@@ -75,9 +75,9 @@ void grouped_inside_tests(const std::vector<ContactSurface>& surfaces, const std
             if (other.closed) {
                 // The groups by their first candidates (each first in its group, so a candidate's
                 // decider is renumbered before the candidate), numbered in that order.
-                body.tree.clear_edge_groups(body.vertices, other.tree, other.vertices, slot_pairs[pair_of[k]],
-                                            pair.body < pair.other ? 0 : 1, pair.vertices, group,
-                                            distance_bounds ? &answers.path : nullptr);
+                [[maybe_unused]] const Index groups = body.tree.clear_edge_groups(
+                    body.vertices, other.tree, other.vertices, slot_pairs[pair_of[k]], pair.body < pair.other ? 0 : 1,
+                    pair.vertices, group, distance_bounds ? &answers.path : nullptr);
                 for (std::size_t i = 0; i < n; ++i) {
                     const auto decider = static_cast<std::size_t>(group[i]);
                     CORO_ASSERT(decider <= i);
@@ -88,6 +88,7 @@ void grouped_inside_tests(const std::vector<ContactSurface>& surfaces, const std
                         group[i] = group[decider];
                     }
                 }
+                CORO_ASSERT(static_cast<Index>(tested.size()) == groups);
             } else {
                 group.resize(n);
                 for (std::size_t i = 0; i < n; ++i)

@@ -14,10 +14,10 @@ namespace coro::detail {
 
 /// The exact-mode answers of one pair's candidates, by groups: candidate i belongs to group
 /// group[i], whose first candidate tested[group[i]] was tested, with answer answer[group[i]]. Only
-/// the tested candidates have an entry in `answer` (an entry per candidate, each written with
-/// its default every frame, cost more than the few tests). With distance bounds, path[i] is a
-/// length of a path of clear edges from candidate tested[group[i]] to candidate i [m] (0 for a
-/// tested one).
+/// the tested candidates have an entry in `answer`: an entry per candidate, each set to its
+/// defaults every frame, cost more than the few tests. With distance bounds, path[i] is a length
+/// of a path of clear edges from candidate tested[group[i]] to candidate i [m] (0 for a tested
+/// one).
 struct GroupedAnswers {
     std::vector<Index> group;       ///< size n (the pair's candidates): 0 .. groups − 1
     std::vector<Index> tested;      ///< size groups: each group's first candidate, ascending
@@ -47,8 +47,8 @@ void grouped_inside_tests(const std::vector<ContactSurface>& surfaces, const std
                           bool distance_bounds,
                           const std::function<void(std::size_t pair, const GroupedAnswers& answers)>& use);
 
-/// The surface distance bound of candidate i of `answers` that is not a decider: its decider's
-/// bound plus its path, rounded up by a relative 10⁻¹² (far above the rounding of the two terms),
+/// The surface distance bound of candidate i of `answers` that was not tested: the bound of its
+/// group's tested candidate plus its path, rounded up by a relative 10⁻¹² (far above the rounding of the two terms),
 /// so some point of the surface lies within it [m].
 inline double shared_distance_bound(const GroupedAnswers& answers, std::size_t i)
 {
