@@ -148,14 +148,13 @@ void AabbTree::build(CRef<Positions> vertices, const Tris& faces)
 {
     m_faces = faces;
     m_nodes.clear();
-    m_node_boxes.clear();
+    m_node_bounds.clear();
     m_subtree_end.clear();
     m_task_roots.clear();
     m_order.resize(static_cast<std::size_t>(faces.rows()));
     std::iota(m_order.begin(), m_order.end(), Index{0});
     m_vertex_order.clear();
     m_vertex_blocks.clear();
-    m_face_boxes.clear();
     m_slot_vertices.clear();
     m_planes.clear();
     m_planes_current = false;
@@ -180,7 +179,7 @@ void AabbTree::build(CRef<Positions> vertices, const Tris& faces)
             (row(vertices, faces(f, 0)) + row(vertices, faces(f, 1)) + row(vertices, faces(f, 2))) / 3.0;
     m_nodes.reserve(static_cast<std::size_t>(faces.rows()) / 2 + 1);
     build_node(centroids, 0, static_cast<Index>(faces.rows()), 0);
-    m_node_boxes.resize(m_nodes.size());
+    m_node_bounds.resize(m_nodes.size());
 
     // Subtree extents (children follow their parent, each subtree contiguous) and, for the
     // parallel refit, the roots of the subtrees two levels below the root.
@@ -213,7 +212,6 @@ void AabbTree::build(CRef<Positions> vertices, const Tris& faces)
             }
         }
     m_vertex_blocks.resize((m_vertex_order.size() + VERTEX_BLOCK - 1) / VERTEX_BLOCK);
-    m_face_boxes.resize(m_order.size());
     m_slot_vertices.resize(3 * m_order.size());
     for (std::size_t i = 0; i < m_order.size(); ++i)
         for (int c = 0; c < 3; ++c)
@@ -268,97 +266,66 @@ void AabbTree::refit_node(const double* data, std::ptrdiff_t stride, Index n)
     WideNode& w = m_nodes[static_cast<std::size_t>(n)];
     const __m128 abs_mask = _mm_castsi128_ps(_mm_set1_epi32(0x7fffffff));
     const __m128 ulp = _mm_set1_ps(0x1p-23f), tiny = _mm_set1_ps(0x1p-126f);
-    // Lane k of the node: the box (l, h), x, y, z in lanes 0..2, rounded outward to floats
-    // (detail::float_down / float_up, three lanes at once).
-    const auto set_lane = [&](int k, __m128 l, __m128 h) {
-        alignas(16) float flo[4], fhi[4];
-        _mm_store_ps(flo, _mm_sub_ps(l, _mm_add_ps(_mm_mul_ps(_mm_and_ps(l, abs_mask), ulp), tiny)));
-        _mm_store_ps(fhi, _mm_add_ps(h, _mm_add_ps(_mm_mul_ps(_mm_and_ps(h, abs_mask), ulp), tiny)));
-        for (int j = 0; j < 3; ++j) {
-            w.lo[j][k] = flo[j];
-            w.hi[j][k] = fhi[j];
+    // A face's box (l, h), x, y, z in lanes 0..2, rounded outward to floats (detail::float_down
+    // / float_up, three lanes at once).
+    const auto round_down = [&](__m128 l) { return _mm_sub_ps(l, _mm_add_ps(_mm_mul_ps(_mm_and_ps(l, abs_mask), ulp), tiny)); };
+    const auto round_up = [&](__m128 h) { return _mm_add_ps(h, _mm_add_ps(_mm_mul_ps(_mm_and_ps(h, abs_mask), ulp), tiny)); };
+    // Lane k's box, x, y, z, 0 in one register (empty for the unused lanes), four of them
+    // transposed into the node's rows at the end; the lanes unrolled, so that the boxes stay in
+    // registers.
+    const auto lane = [&](int k, __m128& lo, __m128& hi) {
+        if (k >= w.count) {
+            lo = _mm_set1_ps(std::numeric_limits<float>::infinity());
+            hi = _mm_set1_ps(-std::numeric_limits<float>::infinity());
+            return;
         }
-    };
+        const Index c = w.child[k];
+        if (c >= 0) {
+            const NodeBounds& cb = m_node_bounds[static_cast<std::size_t>(c)];
+            lo = _mm_load_ps(cb.lo);
+            hi = _mm_load_ps(cb.hi);
+            return;
+        }
+        const Index* fv = &m_slot_vertices[3 * static_cast<std::size_t>(-1 - c)];
 #if defined(__AVX2__)
-    // AVX: (x, y, z, 0) in one register; a point or bound is 3 doubles, loaded without reading
-    // past them.
-    const __m256i xyz = _mm256_setr_epi64x(-1, -1, -1, 0);
-    __m256d lo = _mm256_set1_pd(std::numeric_limits<double>::infinity());
-    __m256d hi = _mm256_set1_pd(-std::numeric_limits<double>::infinity());
-    for (int k = 0; k < w.count; ++k) {
-        const Index c = w.child[k];
-        __m256d bl, bh;
-        if (c < 0) {
-            const std::size_t slot = static_cast<std::size_t>(-1 - c);
-            const Index* fv = &m_slot_vertices[3 * slot];
-            const __m256d a = _mm256_maskload_pd(data + stride * fv[0], xyz);
-            const __m256d b = _mm256_maskload_pd(data + stride * fv[1], xyz);
-            const __m256d d = _mm256_maskload_pd(data + stride * fv[2], xyz);
-            bl = _mm256_min_pd(_mm256_min_pd(a, b), d);
-            bh = _mm256_max_pd(_mm256_max_pd(a, b), d);
-            // min as four doubles (its fourth overwrites max[0], which follows it), then max as
-            // three.
-            Aabb& fb = m_face_boxes[slot];
-            _mm256_storeu_pd(fb.min.data(), bl);
-            _mm_storeu_pd(fb.max.data(), _mm256_castpd256_pd128(bh));
-            _mm_store_sd(fb.max.data() + 2, _mm256_extractf128_pd(bh, 1));
-        } else {
-            const Aabb& cb = m_node_boxes[static_cast<std::size_t>(c)];
-            bl = _mm256_maskload_pd(cb.min.data(), xyz);
-            bh = _mm256_maskload_pd(cb.max.data(), xyz);
-        }
-        lo = _mm256_min_pd(lo, bl);
-        hi = _mm256_max_pd(hi, bh);
-        set_lane(k, _mm256_cvtpd_ps(bl), _mm256_cvtpd_ps(bh));
-    }
-    Aabb& nb = m_node_boxes[static_cast<std::size_t>(n)];
-    _mm256_storeu_pd(nb.min.data(), lo);
-    _mm_storeu_pd(nb.max.data(), _mm256_castpd256_pd128(hi));
-    _mm_store_sd(nb.max.data() + 2, _mm256_extractf128_pd(hi, 1));
+        // AVX: (x, y, z, 0) in one register; a point is 3 doubles, loaded without reading past
+        // them.
+        const __m256i xyz = _mm256_setr_epi64x(-1, -1, -1, 0);
+        const __m256d a = _mm256_maskload_pd(data + stride * fv[0], xyz);
+        const __m256d b = _mm256_maskload_pd(data + stride * fv[1], xyz);
+        const __m256d d = _mm256_maskload_pd(data + stride * fv[2], xyz);
+        lo = round_down(_mm256_cvtpd_ps(_mm256_min_pd(_mm256_min_pd(a, b), d)));
+        hi = round_up(_mm256_cvtpd_ps(_mm256_max_pd(_mm256_max_pd(a, b), d)));
 #else
-    // SSE2: (x, y) in one register, z in the low half of another.
-    __m128d lo_xy = _mm_set1_pd(std::numeric_limits<double>::infinity()), lo_z = lo_xy;
-    __m128d hi_xy = _mm_set1_pd(-std::numeric_limits<double>::infinity()), hi_z = hi_xy;
-    for (int k = 0; k < w.count; ++k) {
-        const Index c = w.child[k];
-        __m128d bl_xy, bl_z, bh_xy, bh_z;
-        if (c < 0) {
-            const std::size_t slot = static_cast<std::size_t>(-1 - c);
-            const Index* fv = &m_slot_vertices[3 * slot];
-            const double* a = data + stride * fv[0];
-            const double* b = data + stride * fv[1];
-            const double* d = data + stride * fv[2];
-            const __m128d a_xy = _mm_loadu_pd(a), b_xy = _mm_loadu_pd(b), d_xy = _mm_loadu_pd(d);
-            const __m128d a_z = _mm_load_sd(a + 2), b_z = _mm_load_sd(b + 2), d_z = _mm_load_sd(d + 2);
-            bl_xy = _mm_min_pd(_mm_min_pd(a_xy, b_xy), d_xy);
-            bh_xy = _mm_max_pd(_mm_max_pd(a_xy, b_xy), d_xy);
-            bl_z = _mm_min_sd(_mm_min_sd(a_z, b_z), d_z);
-            bh_z = _mm_max_sd(_mm_max_sd(a_z, b_z), d_z);
-            Aabb& fb = m_face_boxes[slot];
-            _mm_storeu_pd(fb.min.data(), bl_xy);
-            _mm_store_sd(fb.min.data() + 2, bl_z);
-            _mm_storeu_pd(fb.max.data(), bh_xy);
-            _mm_store_sd(fb.max.data() + 2, bh_z);
-        } else {
-            const Aabb& cb = m_node_boxes[static_cast<std::size_t>(c)];
-            bl_xy = _mm_loadu_pd(cb.min.data());
-            bl_z = _mm_load_sd(cb.min.data() + 2);
-            bh_xy = _mm_loadu_pd(cb.max.data());
-            bh_z = _mm_load_sd(cb.max.data() + 2);
-        }
-        lo_xy = _mm_min_pd(lo_xy, bl_xy);
-        lo_z = _mm_min_sd(lo_z, bl_z);
-        hi_xy = _mm_max_pd(hi_xy, bh_xy);
-        hi_z = _mm_max_sd(hi_z, bh_z);
-        set_lane(k, _mm_movelh_ps(_mm_cvtpd_ps(bl_xy), _mm_cvtpd_ps(bl_z)),
-                 _mm_movelh_ps(_mm_cvtpd_ps(bh_xy), _mm_cvtpd_ps(bh_z)));
-    }
-    Aabb& nb = m_node_boxes[static_cast<std::size_t>(n)];
-    _mm_storeu_pd(nb.min.data(), lo_xy);
-    _mm_store_sd(nb.min.data() + 2, lo_z);
-    _mm_storeu_pd(nb.max.data(), hi_xy);
-    _mm_store_sd(nb.max.data() + 2, hi_z);
+        // SSE2: (x, y) in one register, z in the low half of another.
+        const double* a = data + stride * fv[0];
+        const double* b = data + stride * fv[1];
+        const double* d = data + stride * fv[2];
+        const __m128d a_xy = _mm_loadu_pd(a), b_xy = _mm_loadu_pd(b), d_xy = _mm_loadu_pd(d);
+        const __m128d a_z = _mm_load_sd(a + 2), b_z = _mm_load_sd(b + 2), d_z = _mm_load_sd(d + 2);
+        lo = round_down(_mm_movelh_ps(_mm_cvtpd_ps(_mm_min_pd(_mm_min_pd(a_xy, b_xy), d_xy)),
+                                      _mm_cvtpd_ps(_mm_min_sd(_mm_min_sd(a_z, b_z), d_z))));
+        hi = round_up(_mm_movelh_ps(_mm_cvtpd_ps(_mm_max_pd(_mm_max_pd(a_xy, b_xy), d_xy)),
+                                    _mm_cvtpd_ps(_mm_max_sd(_mm_max_sd(a_z, b_z), d_z))));
 #endif
+    };
+    __m128 lo0, lo1, lo2, lo3, hi0, hi1, hi2, hi3;
+    lane(0, lo0, hi0);
+    lane(1, lo1, hi1);
+    lane(2, lo2, hi2);
+    lane(3, lo3, hi3);
+    // The node's own box, the union of its lanes (each already rounded outward).
+    NodeBounds& nb = m_node_bounds[static_cast<std::size_t>(n)];
+    _mm_store_ps(nb.lo, _mm_min_ps(_mm_min_ps(lo0, lo1), _mm_min_ps(lo2, lo3)));
+    _mm_store_ps(nb.hi, _mm_max_ps(_mm_max_ps(hi0, hi1), _mm_max_ps(hi2, hi3)));
+    _MM_TRANSPOSE4_PS(lo0, lo1, lo2, lo3);
+    _MM_TRANSPOSE4_PS(hi0, hi1, hi2, hi3);
+    _mm_store_ps(w.lo[0], lo0);
+    _mm_store_ps(w.lo[1], lo1);
+    _mm_store_ps(w.lo[2], lo2);
+    _mm_store_ps(w.hi[0], hi0);
+    _mm_store_ps(w.hi[1], hi1);
+    _mm_store_ps(w.hi[2], hi2);
 }
 
 void AabbTree::refit_range(const double* data, std::ptrdiff_t stride, Index first, Index last)
@@ -377,10 +344,27 @@ void AabbTree::refit(CRef<Positions> vertices)
     // The box of each VERTEX_BLOCK consecutive vertices of m_vertex_order, blocks [first, last).
     const auto vertex_blocks = [&](std::size_t first, std::size_t last) {
         for (std::size_t b = first; b < last; ++b) {
+            const std::size_t end = std::min(m_vertex_order.size(), (b + 1) * VERTEX_BLOCK);
+            Aabb& block = m_vertex_blocks[b];
+#if defined(__AVX2__)
+            // (x, y, z, 0) in one register: a point is 3 doubles, loaded without reading past them.
+            const __m256i xyz = _mm256_setr_epi64x(-1, -1, -1, 0);
+            __m256d lo = _mm256_set1_pd(std::numeric_limits<double>::infinity());
+            __m256d hi = _mm256_set1_pd(-std::numeric_limits<double>::infinity());
+            for (std::size_t i = b * VERTEX_BLOCK; i < end; ++i) {
+                const __m256d x = _mm256_maskload_pd(data + stride * m_vertex_order[i], xyz);
+                lo = _mm256_min_pd(x, lo); // as std::min(lo, x)
+                hi = _mm256_max_pd(x, hi);
+            }
+            alignas(32) double l[4], h[4];
+            _mm256_store_pd(l, lo);
+            _mm256_store_pd(h, hi);
+            block.min = Vec3(l[0], l[1], l[2]);
+            block.max = Vec3(h[0], h[1], h[2]);
+#else
             double lo[3] = {std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity(),
                             std::numeric_limits<double>::infinity()};
             double hi[3] = {-lo[0], -lo[1], -lo[2]};
-            const std::size_t end = std::min(m_vertex_order.size(), (b + 1) * VERTEX_BLOCK);
             for (std::size_t i = b * VERTEX_BLOCK; i < end; ++i) {
                 const double* x = data + stride * m_vertex_order[i];
                 for (int j = 0; j < 3; ++j) {
@@ -388,8 +372,9 @@ void AabbTree::refit(CRef<Positions> vertices)
                     hi[j] = std::max(hi[j], x[j]);
                 }
             }
-            m_vertex_blocks[b].min = Vec3(lo[0], lo[1], lo[2]);
-            m_vertex_blocks[b].max = Vec3(hi[0], hi[1], hi[2]);
+            block.min = Vec3(lo[0], lo[1], lo[2]);
+            block.max = Vec3(hi[0], hi[1], hi[2]);
+#endif
         }
     };
     constexpr Index PARALLEL_REFIT_FACES = 1024;
@@ -425,29 +410,39 @@ void AabbTree::refit(CRef<Positions> vertices)
         }
         refit_node(data, stride, 0);
     }
-    m_bounds = m_node_boxes[0];
+    // The exact box of the surface: that of its vertices (the node boxes are rounded).
+    m_bounds = Aabb{};
+    for (const Aabb& block : m_vertex_blocks)
+        m_bounds.extend(block);
 }
 
 const Aabb& AabbTree::bounds() const { return m_bounds; }
 
-void AabbTree::faces_overlapping(const Aabb& box, std::vector<Index>& out) const
+void AabbTree::faces_overlapping(CRef<Positions> vertices, const Aabb& box, std::vector<Index>& out) const
 {
     out.clear();
     if (m_nodes.empty() || box.empty() || !m_bounds.overlaps(box))
         return;
+    // The float lanes bound the exact boxes and `box` is widened to floats, so no lane holding a
+    // face whose exact box overlaps is dropped; the faces are then tested on their exact boxes.
+    __m128 lo[3], hi[3];
+    for (int j = 0; j < 3; ++j) {
+        lo[j] = _mm_set1_ps(detail::float_down(box.min[j]));
+        hi[j] = _mm_set1_ps(detail::float_up(box.max[j]));
+    }
     Index stack[STACK_SIZE];
     int top = 0;
     stack[top++] = 0;
     while (top > 0) {
-        const WideNode& node = m_nodes[static_cast<std::size_t>(stack[--top])];
-        for (int k = 0; k < node.count; ++k) {
+        const Index n = stack[--top];
+        const WideNode& node = m_nodes[static_cast<std::size_t>(n)];
+        for (int m = lanes_meeting(n, lo, hi); m != 0; m &= m - 1) {
+            const int k = __builtin_ctz(static_cast<unsigned>(m));
             const Index c = node.child[k];
-            if (c >= 0) {
-                if (m_node_boxes[static_cast<std::size_t>(c)].overlaps(box))
-                    stack[top++] = c;
-            } else if (m_face_boxes[static_cast<std::size_t>(-1 - c)].overlaps(box)) {
+            if (c >= 0)
+                stack[top++] = c;
+            else if (slot_box(vertices.data(), vertices.outerStride(), static_cast<std::size_t>(-1 - c)).overlaps(box))
                 out.push_back(m_order[static_cast<std::size_t>(-1 - c)]);
-            }
         }
     }
     std::sort(out.begin(), out.end());

@@ -212,7 +212,7 @@ AxisOutcome axis_test_exact(const ContactSurface& surface, const Vec3& point, in
     const Frame f = frame_of(point, axis);
     AxisHits hits(tol.tie_relative);
     const Tris& faces = surface.faces;
-    surface.tree.faces_on_axis_line(point, axis, 0.0, [&](Index face) {
+    surface.tree.faces_on_axis_line(surface.vertices, point, axis, 0.0, [&](Index face) {
         hits.add(classify_exact(vertex_ptr(surface, faces(face, 0)), vertex_ptr(surface, faces(face, 1)),
                                 vertex_ptr(surface, faces(face, 2)), f, tol),
                  face);
@@ -363,7 +363,7 @@ void inside_tests_packet(const ContactSurface& surface, const Vec3* points, int 
         frames[q] = frame_of(points[q], 0);
     }
     const Tris& faces = surface.faces;
-    surface.tree.faces_on_axis_lines(points, count, 0, 0.0, [&](int q, Index face) {
+    surface.tree.faces_on_axis_lines(surface.vertices, points, count, 0, 0.0, [&](int q, Index face) {
         AxisHits& h = hits[q];
         h.add(classify_exact(vertex_ptr(surface, faces(face, 0)), vertex_ptr(surface, faces(face, 1)),
                              vertex_ptr(surface, faces(face, 2)), frames[q], tol),

@@ -23,8 +23,8 @@ constexpr Index UNGROUPED = -1;
 // Queue places between a vertex whose edges are prefetched and the vertex being expanded.
 constexpr std::size_t PREFETCH_AHEAD = 8;
 
-/// The box of a segment [p, q], tested against face boxes (closed) without a branch per bound:
-/// which of six is the first to fail is hard to predict.
+/// The box of a segment [p, q], tested against the boxes of triangles (closed) without a branch
+/// per bound: which of six is the first to fail is hard to predict.
 class SegmentBox {
 public:
     SegmentBox(const double* p, const double* q)
@@ -41,17 +41,23 @@ public:
 #endif
     }
 
-    bool misses(const Aabb& box) const
+    /// Whether the box of the triangle (a, b, c) (3 doubles each) misses the segment's.
+    bool misses(const double* a, const double* b, const double* c) const
     {
 #if defined(__AVX2__)
         // The fourth lanes hold 0 on both sides: never a miss.
-        const __m256d min = _mm256_maskload_pd(box.min.data(), xyz());
-        const __m256d max = _mm256_maskload_pd(box.max.data(), xyz());
+        const __m256d pa = _mm256_maskload_pd(a, xyz()), pb = _mm256_maskload_pd(b, xyz());
+        const __m256d pc = _mm256_maskload_pd(c, xyz());
+        const __m256d min = _mm256_min_pd(_mm256_min_pd(pa, pb), pc);
+        const __m256d max = _mm256_max_pd(_mm256_max_pd(pa, pb), pc);
         const __m256d miss = _mm256_or_pd(_mm256_cmp_pd(min, m_hi, _CMP_GT_OQ), _mm256_cmp_pd(max, m_lo, _CMP_LT_OQ));
         return _mm256_movemask_pd(miss) != 0;
 #else
-        return (box.min[0] > m_hi[0]) | (box.min[1] > m_hi[1]) | (box.min[2] > m_hi[2]) | (box.max[0] < m_lo[0]) |
-               (box.max[1] < m_lo[1]) | (box.max[2] < m_lo[2]);
+        bool miss = false;
+        for (int j = 0; j < 3; ++j)
+            miss = miss | (std::min(std::min(a[j], b[j]), c[j]) > m_hi[j]) |
+                   (std::max(std::max(a[j], b[j]), c[j]) < m_lo[j]);
+        return miss;
 #endif
     }
 
@@ -175,11 +181,15 @@ Index AabbTree::clear_edge_groups(CRef<Positions> vertices, const AabbTree& othe
         };
         for (Index k = start[static_cast<std::size_t>(id)]; k < start[static_cast<std::size_t>(id) + 1]; ++k) {
             const std::size_t g = static_cast<std::size_t>(partners[static_cast<std::size_t>(k)]);
-            if (segment_box.misses(other.m_face_boxes[g]))
-                continue;
             const Index* fv = &other.m_slot_vertices[3 * g];
-            for (int c = 0; c < 3; ++c)
-                corner[c][taken] = other_data + other_stride * fv[c];
+            const double* a = other_data + other_stride * fv[0];
+            const double* b = other_data + other_stride * fv[1];
+            const double* c = other_data + other_stride * fv[2];
+            if (segment_box.misses(a, b, c))
+                continue;
+            corner[0][taken] = a;
+            corner[1][taken] = b;
+            corner[2][taken] = c;
             if (++taken == detail::TRIANGLE_LANES) {
                 if (!batch_clear())
                     return false;

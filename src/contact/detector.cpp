@@ -101,7 +101,7 @@ std::vector<PairCandidates> pair_candidates(const std::vector<ContactSurface>& s
                               body.tree.vertices_in_box(body.vertices, c.overlap, c.vertices);
                               if (mode != DetectionMode::PAPER)
                                   continue;
-                              other.tree.faces_overlapping(c.overlap, overlapping);
+                              other.tree.faces_overlapping(other.vertices, c.overlap, overlapping);
                               for (const Index f : overlapping) {
                                   bool any = false;
                                   for (int j = 0; j < 3 && !any; ++j)

@@ -6,21 +6,22 @@
 
 namespace coro {
 
-double AabbTree::empty_cube(const Vec3& point, double min_half_size, double max_half_size, Index* hint) const
+double AabbTree::empty_cube(CRef<Positions> vertices, const Vec3& point, double min_half_size,
+                            double max_half_size, Index* hint) const
 {
     if (!(max_half_size > 0.0) || !(max_half_size >= min_half_size))
         return 0.0;
     // best: the smallest L∞ distance from the point to a face box met so far, capped.
     double best = max_half_size;
     const auto box_distance = [&](std::size_t slot) {
-        const Aabb& fb = m_face_boxes[slot];
+        const Aabb fb = slot_box(vertices.data(), vertices.outerStride(), slot);
         double d = 0.0;
         for (int j = 0; j < 3; ++j)
             d = std::max({d, fb.min[j] - point[j], point[j] - fb.max[j]});
         return d;
     };
     Index nearest_slot = -1;
-    if (hint && *hint >= 0 && static_cast<std::size_t>(*hint) < m_face_boxes.size()) {
+    if (hint && *hint >= 0 && static_cast<std::size_t>(*hint) < m_order.size()) {
         const double d = box_distance(static_cast<std::size_t>(*hint));
         if (d < best) {
             best = d;

@@ -55,7 +55,7 @@ Index shared_chunk(const ContactSurface& surface, const Vec3* points, int count,
             reach = std::min(reach, chebyshev(points[k], p));
         if (reach < INFINITY) {
             const double cover = std::max((p - box.min).maxCoeff(), (box.max - p).maxCoeff());
-            const double h = surface.tree.empty_cube(p, reach, std::max(reach, cover), &hint);
+            const double h = surface.tree.empty_cube(surface.vertices, p, reach, std::max(reach, cover), &hint);
             if (h > 0.0) {
                 cubes[n_cubes++] = {p.array() - h, p.array() + h, i};
                 if (i > 0 && cubes[n_cubes - 1].holds(points[i - 1])) {

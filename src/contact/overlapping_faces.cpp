@@ -61,19 +61,70 @@ WideBox clipped(const WideBox& box, const WideBox& region)
     return w;
 }
 
-/// Whether boxes a, b and c have a point in common (closed): on each axis the largest lower
-/// bound is at most the smallest upper bound (the same as the three pairwise tests for boxes
-/// that are not empty; overlapping_slots() returns early on an empty region). Without branches, as the outcome is hard to
-/// predict; x and y in one register.
-bool three_boxes_meet(const Aabb& a, const Aabb& b, const Aabb& c)
-{
-    const __m128d lo = _mm_max_pd(_mm_max_pd(_mm_loadu_pd(a.min.data()), _mm_loadu_pd(b.min.data())),
-                                  _mm_loadu_pd(c.min.data()));
-    const __m128d hi = _mm_min_pd(_mm_min_pd(_mm_loadu_pd(a.max.data()), _mm_loadu_pd(b.max.data())),
-                                  _mm_loadu_pd(c.max.data()));
-    const bool z = std::max(std::max(a.min[2], b.min[2]), c.min[2]) <= std::min(std::min(a.max[2], b.max[2]), c.max[2]);
-    return (_mm_movemask_pd(_mm_cmple_pd(lo, hi)) == 3) & z;
-}
+/// The faces of one surface by slot, to compute their exact boxes from the corners: the trees
+/// store single precision boxes only.
+struct FaceBoxes {
+    const double* data;
+    std::ptrdiff_t stride;
+    const Index* slot_vertices; // 3 per slot
+};
+
+/// A region's exact box, against which the exact boxes of two faces are tested.
+class RegionBox {
+public:
+    explicit RegionBox(const Aabb& region) : m_region(region)
+    {
+#if defined(__AVX2__)
+        m_lo = _mm256_maskload_pd(region.min.data(), xyz());
+        m_hi = _mm256_maskload_pd(region.max.data(), xyz());
+#endif
+    }
+
+    /// Whether the exact boxes of face slot_a of `a`, face slot_b of `b` and the region have a
+    /// point in common (closed): on each axis the largest lower bound is at most the smallest
+    /// upper bound (the same as the three pairwise tests for boxes that are not empty;
+    /// overlapping_slots() returns early on an empty region). Without branches, as the outcome
+    /// is hard to predict.
+    bool meets_both(const FaceBoxes& a, Index slot_a, const FaceBoxes& b, Index slot_b) const
+    {
+        const Index* fa = a.slot_vertices + 3 * slot_a;
+        const Index* fb = b.slot_vertices + 3 * slot_b;
+#if defined(__AVX2__)
+        // (x, y, z, 0) per corner: the fourth lanes compare 0 ≤ 0, never a miss; a NaN is one.
+        const auto corner = [&](const FaceBoxes& s, Index v) { return _mm256_maskload_pd(s.data + s.stride * v, xyz()); };
+        const __m256d a0 = corner(a, fa[0]), a1 = corner(a, fa[1]), a2 = corner(a, fa[2]);
+        const __m256d b0 = corner(b, fb[0]), b1 = corner(b, fb[1]), b2 = corner(b, fb[2]);
+        const __m256d lo = _mm256_max_pd(_mm256_max_pd(_mm256_min_pd(_mm256_min_pd(a0, a1), a2),
+                                                       _mm256_min_pd(_mm256_min_pd(b0, b1), b2)),
+                                         m_lo);
+        const __m256d hi = _mm256_min_pd(_mm256_min_pd(_mm256_max_pd(_mm256_max_pd(a0, a1), a2),
+                                                       _mm256_max_pd(_mm256_max_pd(b0, b1), b2)),
+                                         m_hi);
+        return _mm256_movemask_pd(_mm256_cmp_pd(lo, hi, _CMP_LE_OQ)) == 0xF;
+#else
+        bool meet = true;
+        for (int j = 0; j < 3; ++j) {
+            const double* a0 = a.data + a.stride * fa[0] + j;
+            const double* a1 = a.data + a.stride * fa[1] + j;
+            const double* a2 = a.data + a.stride * fa[2] + j;
+            const double* b0 = b.data + b.stride * fb[0] + j;
+            const double* b1 = b.data + b.stride * fb[1] + j;
+            const double* b2 = b.data + b.stride * fb[2] + j;
+            const double lo = std::max({std::min({*a0, *a1, *a2}), std::min({*b0, *b1, *b2}), m_region.min[j]});
+            const double hi = std::min({std::max({*a0, *a1, *a2}), std::max({*b0, *b1, *b2}), m_region.max[j]});
+            meet = meet & (lo <= hi);
+        }
+        return meet;
+#endif
+    }
+
+private:
+    Aabb m_region;
+#if defined(__AVX2__)
+    static __m256i xyz() { return _mm256_setr_epi64x(-1, -1, -1, 0); } // 3 doubles: no load past them
+    __m256d m_lo, m_hi;
+#endif
+};
 
 #if defined(__AVX2__)
 /// Bit 4i + k set: lane i of `a` and lane k of `b` have float boxes that meet each other and
@@ -144,13 +195,19 @@ int AabbTree::lanes_meeting(Index node, const __m128* lo, const __m128* hi) cons
     return _mm_movemask_ps(overlap) & ((1 << w.count) - 1);
 }
 
-void AabbTree::overlapping_faces(const AabbTree& other, const Aabb& region, Pairs& pairs) const
+void AabbTree::overlapping_faces(CRef<Positions> vertices, const AabbTree& other, CRef<Positions> other_vertices,
+                                 const Aabb& region, Pairs& pairs) const
 {
     overlapping_slots(other, region, pairs);
-    for (auto& pair : pairs) {
-        pair[0] = m_order[static_cast<std::size_t>(pair[0])];
-        pair[1] = other.m_order[static_cast<std::size_t>(pair[1])];
-    }
+    // The pairs of the float boxes, narrowed to those of the exact boxes.
+    const FaceBoxes boxes_a{vertices.data(), vertices.outerStride(), m_slot_vertices.data()};
+    const FaceBoxes boxes_b{other_vertices.data(), other_vertices.outerStride(), other.m_slot_vertices.data()};
+    const RegionBox exact_region(region);
+    std::size_t kept = 0;
+    for (const auto& pair : pairs)
+        if (exact_region.meets_both(boxes_a, pair[0], boxes_b, pair[1]))
+            pairs[kept++] = {m_order[static_cast<std::size_t>(pair[0])], other.m_order[static_cast<std::size_t>(pair[1])]};
+    pairs.resize(kept);
 }
 
 void AabbTree::overlapping_slots(const AabbTree& other, const Aabb& region, Pairs& pairs) const
@@ -222,7 +279,8 @@ void AabbTree::walk_overlapping(const AabbTree& other, const Aabb& region, Index
                                 Pairs& slots) const
 {
     // Float boxes bound the exact ones and the region is widened to floats, so a lane is dropped
-    // only when its exact box misses; face pairs are then checked on their exact boxes.
+    // only when its exact box misses; a pair of faces is taken when their float boxes meet (no
+    // exact test: it read six corners per pair and almost never failed).
     const WideBox wide_region = wide_box(region);
     // The pairs gather on the stack and join `slots` a block at a time: pushed one by one, the
     // growth of the many small vectors of a parallel walk cost as much as its box tests.
@@ -230,10 +288,6 @@ void AabbTree::walk_overlapping(const AabbTree& other, const Aabb& region, Index
     std::array<Index, 2> block[BLOCK];
     int in_block = 0;
     const auto emit = [&](Index slot_a, Index slot_b) {
-        const Aabb& box_a = m_face_boxes[static_cast<std::size_t>(slot_a)];
-        const Aabb& box_b = other.m_face_boxes[static_cast<std::size_t>(slot_b)];
-        if (!three_boxes_meet(box_a, box_b, region))
-            return;
         block[in_block++] = {slot_a, slot_b};
         if (in_block == BLOCK) {
             slots.insert(slots.end(), block, block + BLOCK);

@@ -37,7 +37,7 @@ bool AabbTree::segment_clear(CRef<Positions> vertices, const Vec3& p, const Vec3
                 continue;
             }
             const std::size_t slot = static_cast<std::size_t>(-1 - node.child[k]);
-            const Aabb& fb = m_face_boxes[slot];
+            const Aabb fb = slot_box(data, stride, slot);
             if (fb.min[0] > hi[0] || fb.min[1] > hi[1] || fb.min[2] > hi[2] || fb.max[0] < lo[0] ||
                 fb.max[1] < lo[1] || fb.max[2] < lo[2])
                 continue;

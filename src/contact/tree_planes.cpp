@@ -134,8 +134,11 @@ void AabbTree::update_planes(CRef<Positions> vertices) const
             lo = std::min(lo, t);
             hi = std::max(hi, t);
         }
-        const Aabb& box = m_node_boxes[static_cast<std::size_t>(node)];
-        const double magnitude = box.min.cwiseAbs().sum() + box.max.cwiseAbs().sum();
+        // Bounds |x| of every coordinate x of the node's vertices (they lie in its float box).
+        const NodeBounds& box = m_node_bounds[static_cast<std::size_t>(node)];
+        double magnitude = 0.0;
+        for (int j = 0; j < 3; ++j)
+            magnitude += std::abs(static_cast<double>(box.lo[j])) + std::abs(static_cast<double>(box.hi[j]));
         const double mid = 0.5 * (lo + hi);
         const float off = static_cast<float>(mid);
         const double slack = 0.5 * (hi - lo) + std::abs(static_cast<double>(off) - mid) + 1e-14 * magnitude;

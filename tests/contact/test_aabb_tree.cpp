@@ -74,7 +74,7 @@ void expect_queries_equal_brute_force(const AabbTree& tree, const SurfaceMesh& m
         // Boxes.
         const Vec3 corner = random_point(lo, hi, rng);
         const Aabb box{corner, corner + Vec3(extent(rng), extent(rng), extent(rng))};
-        tree.faces_overlapping(box, got);
+        tree.faces_overlapping(m.vertices, box, got);
         want.clear();
         for (Index f = 0; f < m.faces.rows(); ++f)
             if (face_box(m, f).overlaps(box))
@@ -96,7 +96,7 @@ void expect_queries_equal_brute_force(const AabbTree& tree, const SurfaceMesh& m
         const double tolerance = q % 2 == 0 ? 0.0 : 0.01;
         const int u = (axis + 1) % 3, v = (axis + 2) % 3;
         got.clear();
-        tree.faces_on_axis_line(p, axis, tolerance, [&](Index f) { got.push_back(f); });
+        tree.faces_on_axis_line(m.vertices, p, axis, tolerance, [&](Index f) { got.push_back(f); });
         std::sort(got.begin(), got.end());
         ASSERT_TRUE(std::adjacent_find(got.begin(), got.end()) == got.end()) << "a face visited twice";
         want.clear();
@@ -113,7 +113,7 @@ void expect_queries_equal_brute_force(const AabbTree& tree, const SurfaceMesh& m
         }
         ASSERT_EQ(got, want) << "axis query " << q;
         got.clear();
-        tree.faces_on_axis_line(p, axis, tolerance, [&](Index f) {
+        tree.faces_on_axis_line(m.vertices, p, axis, tolerance, [&](Index f) {
             got.push_back(f);
             return cutoff;
         });
@@ -216,7 +216,7 @@ TEST(AabbTree, LargeTreeRefitsInParallelAsSerially)
         const Vec3 p(0.5, 0.4, 0.6);
         std::vector<Index> got, want;
         const Aabb box{Vec3(0.3, 0.3, 0.3), Vec3(0.45, 0.5, 0.4)};
-        tree->faces_overlapping(box, got);
+        tree->faces_overlapping(m.vertices, box, got);
         for (Index f = 0; f < m.faces.rows(); ++f)
             if (face_box(m, f).overlaps(box))
                 want.push_back(f);
@@ -235,10 +235,10 @@ TEST(AabbTree, EmptyTreeAnswersNothing)
     tree.build(Positions(0, 3), Tris(0, 3));
     EXPECT_TRUE(tree.bounds().empty());
     std::vector<Index> out{1, 2};
-    tree.faces_overlapping(Aabb{Vec3::Zero(), Vec3::Ones()}, out);
+    tree.faces_overlapping(Positions(0, 3), Aabb{Vec3::Zero(), Vec3::Ones()}, out);
     EXPECT_TRUE(out.empty());
     int visits = 0;
-    tree.faces_on_axis_line(Vec3::Zero(), 0, 1.0, [&](Index) { ++visits; });
+    tree.faces_on_axis_line(Positions(0, 3), Vec3::Zero(), 0, 1.0, [&](Index) { ++visits; });
     EXPECT_EQ(visits, 0);
     EXPECT_EQ(tree.nearest(Positions(0, 3), Vec3::Zero()).face, -1);
 }
@@ -345,7 +345,7 @@ TEST(AabbTree, NearestAndAxisLineFromAFarPoint)
     EXPECT_EQ(got.distance, std::sqrt(best));
     // The x line through (−3e19, 0.1, 0.2) crosses the sphere: faces are visited.
     int visits = 0;
-    s.tree.faces_on_axis_line(Vec3(-3e19, 0.1, 0.2), 0, 0.0, [&](Index) {
+    s.tree.faces_on_axis_line(s.vertices, Vec3(-3e19, 0.1, 0.2), 0, 0.0, [&](Index) {
         ++visits;
         return std::numeric_limits<double>::infinity();
     });

@@ -53,13 +53,29 @@ Pairs sorted(Pairs pairs)
 void expect_pairs_match_brute_force(const ContactSurface& a, const ContactSurface& b, const Aabb& region)
 {
     Pairs pairs;
-    a.tree.overlapping_faces(b.tree, region, pairs);
+    a.tree.overlapping_faces(a.vertices, b.tree, b.vertices, region, pairs);
     const Pairs expected = brute_force_pairs(a, b, region);
     ASSERT_GT(expected.size(), 50u);
     EXPECT_EQ(sorted(pairs), expected); // each pair once
     Pairs again;
-    a.tree.overlapping_faces(b.tree, region, again);
+    a.tree.overlapping_faces(a.vertices, b.tree, b.vertices, region, again);
     EXPECT_EQ(again, pairs); // the same order every time
+
+    // The slot pairs hold every exact pair, and others only where the boxes meet within float
+    // rounding (here: when grown by a relative 10⁻⁶).
+    Pairs slots;
+    a.tree.overlapping_slots(b.tree, region, slots);
+    Pairs from_slots;
+    for (const auto& [slot_a, slot_b] : slots)
+        from_slots.push_back({a.tree.slot_face(slot_a), b.tree.slot_face(slot_b)});
+    from_slots = sorted(from_slots);
+    EXPECT_TRUE(std::adjacent_find(from_slots.begin(), from_slots.end()) == from_slots.end()) << "a pair twice";
+    EXPECT_TRUE(std::includes(from_slots.begin(), from_slots.end(), expected.begin(), expected.end()));
+    const double grow = 1e-6 * (region.max - region.min).norm();
+    for (const auto& [f, g] : from_slots)
+        EXPECT_TRUE(face_box(a, f).inflated(grow).overlaps(face_box(b, g)) &&
+                    face_box(a, f).inflated(grow).overlaps(region) && face_box(b, g).inflated(grow).overlaps(region))
+            << "faces " << f << ", " << g;
 }
 
 /// The groups of a's candidates against b, checked: a group's vertices are all inside b or all
@@ -147,7 +163,7 @@ TEST(OverlappingFaces, EmptyWhenTheBoxesMiss)
     const ContactSurface a = deformed_ball(Vec3::Zero(), 1.0, 6, 0.0, "a");
     const ContactSurface b = deformed_ball(Vec3(3, 0, 0), 1.0, 6, 0.0, "b");
     Pairs pairs{{1, 2}};
-    a.tree.overlapping_faces(b.tree, a.tree.bounds().intersection(b.tree.bounds()), pairs);
+    a.tree.overlapping_faces(a.vertices, b.tree, b.vertices, a.tree.bounds().intersection(b.tree.bounds()), pairs);
     EXPECT_TRUE(pairs.empty());
 }
 

@@ -56,8 +56,8 @@ void expect_cubes_match_brute_force(const AabbTree& tree, const SurfaceMesh& m, 
         const double distance = brute_force_distance(m, p);
         const double cap = q % 3 == 0 ? 0.05 : 10.0;
         const double min_half_size = q % 5 == 0 ? 0.02 : 0.0;
-        const double h = tree.empty_cube(p, min_half_size, cap);
-        EXPECT_EQ(tree.empty_cube(p, min_half_size, cap, &hint), h) << "hint " << hint; // bitwise
+        const double h = tree.empty_cube(m.vertices, p, min_half_size, cap);
+        EXPECT_EQ(tree.empty_cube(m.vertices, p, min_half_size, cap, &hint), h) << "hint " << hint; // bitwise
         const double wanted = std::min(distance, cap);
         if (wanted < min_half_size * (1.0 - 1e-9)) {
             EXPECT_EQ(h, 0.0) << p.transpose();
@@ -108,7 +108,7 @@ TEST(EmptyCube, PointOnTheSurfaceOrFarCoordinatesGetASafeCube)
     AabbTree tree;
     tree.build(m.vertices, m.faces);
     for (Index f = 0; f < m.faces.rows(); ++f) // surface vertices: no cube
-        EXPECT_EQ(tree.empty_cube(m.vertices.row(m.faces(f, 0)).transpose(), 0.0, 1.0), 0.0) << "face " << f;
+        EXPECT_EQ(tree.empty_cube(m.vertices, m.vertices.row(m.faces(f, 0)).transpose(), 0.0, 1.0), 0.0) << "face " << f;
     expect_cubes_match_brute_force(tree, m, tree.bounds().inflated(0.5), 200, rng);
     // Points a hair outside the surface's box (gaps down to the margin): any cube is still clear.
     const Aabb bounds = tree.bounds();
@@ -118,7 +118,7 @@ TEST(EmptyCube, PointOnTheSurfaceOrFarCoordinatesGetASafeCube)
             Vec3 p = random_point(bounds.min, bounds.max, rng);
             const int axis = q % 3;
             p[axis] = q % 2 == 0 ? bounds.max[axis] + gap : bounds.min[axis] - gap;
-            const double h = tree.empty_cube(p, 0.0, 1.0);
+            const double h = tree.empty_cube(m.vertices, p, 0.0, 1.0);
             if (h > 0.0) {
                 expect_cube_misses_every_face(m, p, h);
                 ++cubes;
@@ -132,6 +132,6 @@ TEST(EmptyCube, EmptyTreeGivesTheCap)
 {
     AabbTree tree;
     tree.build(Positions(0, 3), Tris(0, 3));
-    EXPECT_EQ(tree.empty_cube(Vec3(1, 2, 3), 0.5, 2.0) , 2.0 * (1.0 - 0x1p-30) - 3.0 * 0x1p-40);
-    EXPECT_EQ(tree.empty_cube(Vec3(1, 2, 3), 0.5, 0.0), 0.0);
+    EXPECT_EQ(tree.empty_cube(Positions(0, 3), Vec3(1, 2, 3), 0.5, 2.0) , 2.0 * (1.0 - 0x1p-30) - 3.0 * 0x1p-40);
+    EXPECT_EQ(tree.empty_cube(Positions(0, 3), Vec3(1, 2, 3), 0.5, 0.0), 0.0);
 }

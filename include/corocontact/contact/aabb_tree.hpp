@@ -42,7 +42,9 @@ public:
     /// Recomputes every box bottom-up for new positions of the same vertices: one pass over the
     /// nodes in reverse build order (children before parents), no recursion, no allocation; large
     /// trees refit their top subtrees as parallel tasks. Every box is a pure function of its
-    /// children, so the result does not depend on the thread count.
+    /// children, so the result does not depend on the thread count. Only the single precision
+    /// node boxes are stored: a query that needs a face's exact box computes it from `vertices`
+    /// (writing a double box per face was most of a cold refit's memory traffic).
     void refit(CRef<Positions> vertices);
 
     /// Computes the face planes and node slabs that let nearest() skip faces and subtrees by
@@ -59,9 +61,12 @@ public:
     /// Nodes of the hierarchy (each holds up to four children, faces or nodes).
     Index num_nodes() const { return static_cast<Index>(m_nodes.size()); }
     const Tris& faces() const { return m_faces; }
+    /// The face in `slot`, its place in the tree's leaf order (0 ≤ slot < num_faces()).
+    Index slot_face(Index slot) const { return m_order[static_cast<std::size_t>(slot)]; }
 
     /// Faces whose box overlaps `box` (closed intervals), ascending.
-    void faces_overlapping(const Aabb& box, std::vector<Index>& out) const;
+    /// @param[in] vertices  the positions the tree was last built or refit with
+    void faces_overlapping(CRef<Positions> vertices, const Aabb& box, std::vector<Index>& out) const;
 
     /// Vertices used by the faces that lie in `box` (closed), in the tree's spatial order
     /// (neighbours close together, good for the cache of a following query loop), not ascending.
@@ -77,8 +82,10 @@ public:
     /// distance along the axis still of interest: subtrees whose boxes lie farther than the
     /// smallest value returned so far from `point` along the axis are skipped. Child nodes are
     /// visited nearer first; the order depends only on the tree and `point` (deterministic).
+    /// @param[in] vertices  the positions the tree was last built or refit with
     template <class Visit>
-    void faces_on_axis_line(const Vec3& point, int axis, double tolerance, Visit&& visit) const;
+    void faces_on_axis_line(CRef<Positions> vertices, const Vec3& point, int axis, double tolerance,
+                            Visit&& visit) const;
 
     /// Queries per packet of faces_on_axis_lines().
     static constexpr int AXIS_PACKET = 8;
@@ -93,9 +100,11 @@ public:
     /// the order of the visits differs (children are ordered by the gaps of the packet's first
     /// active line), so a visitor must not depend on it. Cheaper than count single walks when
     /// the lines are close together (their paths through the tree share most nodes).
-    /// @param[in] points  count points, 1 ≤ count ≤ AXIS_PACKET
+    /// @param[in] vertices  the positions the tree was last built or refit with
+    /// @param[in] points    count points, 1 ≤ count ≤ AXIS_PACKET
     template <class Visit>
-    void faces_on_axis_lines(const Vec3* points, int count, int axis, double tolerance, Visit&& visit) const;
+    void faces_on_axis_lines(CRef<Positions> vertices, const Vec3* points, int count, int axis, double tolerance,
+                             Visit&& visit) const;
 
     /// Half-size h of a cube centred at `point` that meets no face box, so no point of the
     /// surface: the L∞ distance from `point` to the nearest face box, capped at `max_half_size`,
@@ -105,6 +114,7 @@ public:
     /// surface it is inside exactly when `point` is.
     /// Branch and bound over the boxes, nearer children first; the walk stops, returning 0, as
     /// soon as h is known to be below `min_half_size`.
+    /// @param[in] vertices       the positions the tree was last built or refit with
     /// @param[in] min_half_size  smallest useful h (≥ 0), same length unit as the positions
     /// @param[in] max_half_size  largest h wanted (≥ min_half_size); the whole walk is cheaper
     ///                           with a smaller cap
@@ -113,7 +123,8 @@ public:
     ///                           next for nearby points makes the walk shorter (the answer does
     ///                           not depend on it)
     /// @return h, 0 ≤ h ≤ max_half_size, or 0
-    double empty_cube(const Vec3& point, double min_half_size, double max_half_size, Index* hint = nullptr) const;
+    double empty_cube(CRef<Positions> vertices, const Vec3& point, double min_half_size, double max_half_size,
+                      Index* hint = nullptr) const;
 
     /// Whether the closed segment [p, q] is shown to meet no face of the surface: every face
     /// whose box meets the segment's box is shown disjoint from the segment by signs beyond their
@@ -128,10 +139,16 @@ public:
     /// both meet `region`: a walk of the two trees together, four children against four (large
     /// trees: from node pairs a few levels down both trees, as parallel tasks). Every face of
     /// `other` that meets a face of this surface inside `region` is in a pair with it.
-    /// @param[out] pairs  the pairs, each once, in an order that depends only on the two trees
-    void overlapping_faces(const AabbTree& other, const Aabb& region, std::vector<std::array<Index, 2>>& pairs) const;
-    /// overlapping_faces() with each face as its slot, its place in its tree's leaf order (what
-    /// clear_edge_groups() takes: it saves two lookups per face, far apart in memory).
+    /// @param[in] vertices        this surface's positions (last build or refit)
+    /// @param[in] other_vertices  `other`'s positions (last build or refit)
+    /// @param[out] pairs          the pairs, each once, in an order that depends only on the two
+    ///                            trees
+    void overlapping_faces(CRef<Positions> vertices, const AabbTree& other, CRef<Positions> other_vertices,
+                           const Aabb& region, std::vector<std::array<Index, 2>>& pairs) const;
+    /// The walk of overlapping_faces() with each face as its slot, its place in its tree's leaf
+    /// order (what clear_edge_groups() takes: it saves two lookups per face, far apart in memory),
+    /// and the faces' single precision boxes (rounded outward) in place of their exact boxes: a
+    /// superset of overlapping_faces(), by pairs whose boxes meet only within float rounding.
     /// @param[out] slot_pairs  (slot in this tree, slot in `other`), each pair once
     void overlapping_slots(const AabbTree& other, const Aabb& region,
                            std::vector<std::array<Index, 2>>& slot_pairs) const;
@@ -233,6 +250,20 @@ private:
     void build_slab_vertices(std::size_t vertex_count);
     void refit_range(const double* data, std::ptrdiff_t stride, Index first, Index last);
     void refit_node(const double* data, std::ptrdiff_t stride, Index n);
+    /// The exact box of the face in `slot`, its corners at data + stride·v (3 doubles each).
+    Aabb slot_box(const double* data, std::ptrdiff_t stride, std::size_t slot) const
+    {
+        const Index* fv = &m_slot_vertices[3 * slot];
+        const double* a = data + stride * fv[0];
+        const double* b = data + stride * fv[1];
+        const double* c = data + stride * fv[2];
+        Aabb box;
+        for (int j = 0; j < 3; ++j) {
+            box.min[j] = std::min(std::min(a[j], b[j]), c[j]);
+            box.max[j] = std::max(std::max(a[j], b[j]), c[j]);
+        }
+        return box;
+    }
     /// The planes of a node's children: unit normal u, offset and slack s such that every point
     /// x of the child (a face, or the faces of a child node) has |u·x − offset| ≤ s (s = +∞ for
     /// a degenerate face or a child whose faces' normals nearly cancel), so
@@ -244,8 +275,14 @@ private:
     };
     static void face_plane(const double* A, const double* B, const double* C, FacePlanes& w, int k);
 
+    /// A node's box in single precision, rounded outward: x, y, z and an unused fourth lane.
+    struct alignas(32) NodeBounds {
+        float lo[4];
+        float hi[4];
+    };
+
     std::vector<WideNode> m_nodes;  // root at 0; every subtree is a contiguous range after its root
-    std::vector<Aabb> m_node_boxes; // exact box of each node (union of its children's)
+    std::vector<NodeBounds> m_node_bounds; // each node's box: the union of its lanes
     std::vector<Index> m_subtree_end; // one past the last node of each node's subtree
     std::vector<Index> m_node_slots;  // 2 per node: the range of slots (faces) of its subtree
     std::vector<Index> m_task_roots;  // parallel refit: roots of the subtrees refit as tasks
@@ -254,7 +291,6 @@ private:
     mutable bool m_planes_current = false;    // m_planes match the positions of the last refit
     std::vector<Index> m_slab_vertex_start;   // #nodes + 1; empty range: no slab (too many faces)
     std::vector<Index> m_slab_vertices;       // distinct vertices of each node's faces
-    std::vector<Aabb> m_face_boxes;   // exact box of the face in each slot, refit with the nodes
     std::vector<Index> m_slot_vertices; // 3 per slot: the vertices of the face in that slot
     Aabb m_bounds;
     std::vector<Index> m_vertex_order;  // used vertices, first appearance in leaf order
@@ -293,7 +329,8 @@ inline float float_threshold(double x)
 } // namespace detail
 
 template <class Visit>
-void AabbTree::faces_on_axis_line(const Vec3& point, int axis, double tolerance, Visit&& visit) const
+void AabbTree::faces_on_axis_line(CRef<Positions> vertices, const Vec3& point, int axis, double tolerance,
+                                  Visit&& visit) const
 {
     if (m_nodes.empty())
         return;
@@ -338,7 +375,7 @@ void AabbTree::faces_on_axis_line(const Vec3& point, int axis, double tolerance,
         for (int m = mask & node.face_mask; m != 0; m &= m - 1) {
             const int k = __builtin_ctz(static_cast<unsigned>(m));
             const std::size_t slot = static_cast<std::size_t>(-1 - node.child[k]);
-            const Aabb& fb = m_face_boxes[slot]; // the exact test
+            const Aabb fb = slot_box(vertices.data(), vertices.outerStride(), slot); // the exact test
             if (pu < fb.min[u] - tolerance || pu > fb.max[u] + tolerance || pv < fb.min[v] - tolerance ||
                 pv > fb.max[v] + tolerance)
                 continue;
@@ -401,7 +438,8 @@ struct Float8 {
 } // namespace detail
 
 template <class Visit>
-void AabbTree::faces_on_axis_lines(const Vec3* points, int count, int axis, double tolerance, Visit&& visit) const
+void AabbTree::faces_on_axis_lines(CRef<Positions> vertices, const Vec3* points, int count, int axis,
+                                   double tolerance, Visit&& visit) const
 {
     static_assert(AXIS_PACKET == 8, "the packet walk uses 8-float registers");
     if (m_nodes.empty() || count <= 0)
@@ -467,7 +505,7 @@ void AabbTree::faces_on_axis_lines(const Vec3* points, int count, int axis, doub
             if (lines[k] == 0)
                 continue;
             const std::size_t slot = static_cast<std::size_t>(-1 - node.child[k]);
-            const Aabb& fb = m_face_boxes[slot]; // the exact test
+            const Aabb fb = slot_box(vertices.data(), vertices.outerStride(), slot); // the exact test
             const Index face = m_order[slot];
             for (unsigned l = lines[k]; l != 0; l &= l - 1) {
                 const int q = __builtin_ctz(l);
