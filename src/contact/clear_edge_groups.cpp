@@ -16,7 +16,7 @@ namespace coro {
 namespace {
 
 // Vertex states during the search: not a candidate, or a candidate not yet in a group; a
-// grouped candidate holds its decider's index (≥ 0).
+// grouped candidate holds its group's number (≥ 0).
 constexpr Index NOT_CANDIDATE = -2;
 constexpr Index UNGROUPED = -1;
 
@@ -101,8 +101,8 @@ struct PairedIdReset {
 
 Index AabbTree::clear_edge_groups(CRef<Positions> vertices, const AabbTree& other, CRef<Positions> other_vertices,
                                   const std::vector<std::array<Index, 2>>& slot_pairs, int column,
-                                  const std::vector<Index>& candidates, std::vector<Index>& decider,
-                                  std::vector<double>* path) const
+                                  const std::vector<Index>& candidates, std::vector<Index>& group,
+                                  std::vector<Index>& firsts, std::vector<double>* path) const
 {
     const std::size_t n = candidates.size();
 
@@ -126,7 +126,8 @@ Index AabbTree::clear_edge_groups(CRef<Positions> vertices, const AabbTree& othe
         scratch.length_to.resize(vertex_count);
     if (scratch.queue.size() < n)
         scratch.queue.resize(n);
-    decider.resize(n);
+    group.resize(n);
+    firsts.clear();
     if (path)
         path->resize(n);
     const PairedIdReset reset{slot_pairs, mine};
@@ -209,14 +210,13 @@ Index AabbTree::clear_edge_groups(CRef<Positions> vertices, const AabbTree& othe
     // The search with or without path lengths, compiled apart: the test of `path` in the loop
     // over edges kept the lengths' loads and address arithmetic in it.
     const auto search = [&](auto with_path) {
-        Index groups = 0;
         for (std::size_t i = 0; i < n; ++i) {
             const Index first = candidates[i];
             if (state[static_cast<std::size_t>(first)] != UNGROUPED)
                 continue;
-            ++groups;
-            const auto group = static_cast<Index>(i);
-            state[static_cast<std::size_t>(first)] = group;
+            const auto number = static_cast<Index>(firsts.size());
+            firsts.push_back(static_cast<Index>(i));
+            state[static_cast<std::size_t>(first)] = number;
             if constexpr (with_path)
                 length_to[static_cast<std::size_t>(first)] = 0.0;
             std::size_t head = 0, tail = 0;
@@ -243,7 +243,7 @@ Index AabbTree::clear_edge_groups(CRef<Positions> vertices, const AabbTree& othe
                     const Index id1 = paired_id[static_cast<std::size_t>(slots[1])];
                     if (id0 >= 0 && id1 >= 0 && !paired_edge_clear(u, v, id0, id1))
                         continue;
-                    s = group;
+                    s = number;
                     queue[tail++] = v;
                     __builtin_prefetch(&m_edge_start[static_cast<std::size_t>(v)]);
                     if constexpr (with_path) {
@@ -258,16 +258,18 @@ Index AabbTree::clear_edge_groups(CRef<Positions> vertices, const AabbTree& othe
                 }
             }
         }
-        return groups;
     };
-    const Index groups = path ? search(std::true_type{}) : search(std::false_type{});
+    if (path)
+        search(std::true_type{});
+    else
+        search(std::false_type{});
     for (std::size_t i = 0; i < n; ++i)
-        decider[i] = state[static_cast<std::size_t>(candidates[i])];
+        group[i] = state[static_cast<std::size_t>(candidates[i])];
     if (path) {
         for (std::size_t i = 0; i < n; ++i)
             (*path)[i] = length_to[static_cast<std::size_t>(candidates[i])];
     }
-    return groups;
+    return static_cast<Index>(firsts.size());
 }
 
 } // namespace coro

@@ -20,7 +20,8 @@ constexpr std::uint32_t NONE = ~std::uint32_t{0};
 /// ordered by (body, other) and slot offsets[k] + i belongs to its pair k's candidate i, a vertex
 /// at most once per pair. Per body, a bit per vertex marks those inside and each marked vertex
 /// heads a chain of its slots, linked from the body's last pair back so that it runs by other
-/// ascending; the marks are then read in order: O(points + candidates + vertices / 64). `slots`
+/// ascending; the marks are then read in order: O(points + candidates + vertices / 64). A body
+/// in one pair only (two bodies: both) needs no chains: a marked vertex has one slot. `slots`
 /// holds each inside slot's point with its depth and normal; empty: the points carry body,
 /// vertex and other only. The points are appended in order, each built in place: a vector
 /// sized first (every point set to its defaults) and then filled by a task per body passed over
@@ -56,6 +57,29 @@ std::vector<ContactPoint> sorted_points(const std::vector<ContactSurface>& surfa
         if (head_size < vertices)
             head.reset(new std::uint32_t[head_size = vertices]);
         const std::size_t base = offsets[first];
+        if (last == first + 1) { // one pair (e.g. two bodies): no chains, a vertex has one slot
+            const std::vector<Index>& vertex = candidates[first].vertices;
+            const unsigned char* flag = inside.data() + base;
+            const Index other = candidates[first].other;
+            for (std::size_t i = 0; i < vertex.size(); ++i) {
+                const auto v = static_cast<std::size_t>(vertex[i]);
+                marked[v / 64] |= static_cast<std::uint64_t>(flag[i]) << (v % 64);
+                head[v] = static_cast<std::uint32_t>(i); // read only where marked
+            }
+            for (std::size_t w = 0; w < marked.size(); ++w)
+                for (std::uint64_t bits = marked[w]; bits != 0; bits &= bits - 1) {
+                    const std::size_t v = 64 * w + static_cast<std::size_t>(__builtin_ctzll(bits));
+                    if (!slots.empty()) {
+                        points.push_back(slots[base + head[v]]);
+                    } else {
+                        ContactPoint& point = points.emplace_back();
+                        point.body = body;
+                        point.vertex = static_cast<Index>(v);
+                        point.other = other;
+                    }
+                }
+            continue;
+        }
         if (link_size < offsets[last] - base)
             link.reset(new Link[link_size = offsets[last] - base]);
         for (std::size_t k = last; k-- > first;) {

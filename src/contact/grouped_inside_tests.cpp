@@ -71,24 +71,10 @@ void grouped_inside_tests(const std::vector<ContactSurface>& surfaces, const std
             const ContactSurface& body = surfaces[static_cast<std::size_t>(pair.body)];
             const ContactSurface& other = surfaces[static_cast<std::size_t>(pair.other)];
             const std::size_t n = pair.vertices.size();
-            tested.clear();
             if (other.closed) {
-                // The groups by their first candidates (each first in its group, so a candidate's
-                // decider is renumbered before the candidate), numbered in that order.
-                [[maybe_unused]] const Index groups = body.tree.clear_edge_groups(
-                    body.vertices, other.tree, other.vertices, slot_pairs[pair_of[k]], pair.body < pair.other ? 0 : 1,
-                    pair.vertices, group, distance_bounds ? &answers.path : nullptr);
-                for (std::size_t i = 0; i < n; ++i) {
-                    const auto decider = static_cast<std::size_t>(group[i]);
-                    CORO_ASSERT(decider <= i);
-                    if (decider == i) {
-                        group[i] = static_cast<Index>(tested.size());
-                        tested.push_back(static_cast<Index>(i));
-                    } else {
-                        group[i] = group[decider];
-                    }
-                }
-                CORO_ASSERT(static_cast<Index>(tested.size()) == groups);
+                body.tree.clear_edge_groups(body.vertices, other.tree, other.vertices, slot_pairs[pair_of[k]],
+                                            pair.body < pair.other ? 0 : 1, pair.vertices, group, tested,
+                                            distance_bounds ? &answers.path : nullptr);
             } else {
                 group.resize(n);
                 for (std::size_t i = 0; i < n; ++i)

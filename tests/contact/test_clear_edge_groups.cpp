@@ -50,6 +50,27 @@ Pairs sorted(Pairs pairs)
     return pairs;
 }
 
+/// clear_edge_groups() of a's candidates against b, as each candidate's decider: the index of
+/// its group's first candidate. Checks the groups' numbering on the way.
+std::vector<Index> deciders(const ContactSurface& a, const ContactSurface& b, const Pairs& pairs, int column,
+                            const std::vector<Index>& candidates, std::vector<double>* path)
+{
+    std::vector<Index> group, firsts;
+    const Index groups = a.tree.clear_edge_groups(a.vertices, b.tree, b.vertices, pairs, column, candidates, group,
+                                                  firsts, path);
+    EXPECT_EQ(static_cast<std::size_t>(groups), firsts.size());
+    EXPECT_EQ(group.size(), candidates.size());
+    EXPECT_TRUE(std::is_sorted(firsts.begin(), firsts.end()));
+    std::vector<Index> decider(group.size());
+    for (std::size_t i = 0; i < group.size(); ++i) {
+        EXPECT_TRUE(group[i] >= 0 && group[i] < groups) << "candidate " << i;
+        decider[i] = firsts[static_cast<std::size_t>(group[i])];
+    }
+    for (Index g = 0; g < groups; ++g)
+        EXPECT_EQ(group[static_cast<std::size_t>(firsts[static_cast<std::size_t>(g)])], g) << "group " << g;
+    return decider;
+}
+
 void expect_pairs_match_brute_force(const ContactSurface& a, const ContactSurface& b, const Aabb& region)
 {
     Pairs pairs;
@@ -88,9 +109,8 @@ Index expect_groups_agree_with_winding_numbers(const ContactSurface& a, const Co
     a.tree.vertices_in_box(a.vertices, region, candidates);
     Pairs pairs;
     a.tree.overlapping_slots(b.tree, region, pairs);
-    std::vector<Index> decider;
     std::vector<double> path;
-    const Index groups = a.tree.clear_edge_groups(a.vertices, b.tree, b.vertices, pairs, 0, candidates, decider, &path);
+    const std::vector<Index> decider = deciders(a, b, pairs, 0, candidates, &path);
     EXPECT_EQ(decider.size(), candidates.size());
     EXPECT_EQ(path.size(), candidates.size());
     Index firsts = 0;
@@ -112,8 +132,7 @@ Index expect_groups_agree_with_winding_numbers(const ContactSurface& a, const Co
         EXPECT_EQ(winding[i] > 0.5, winding[d] > 0.5) << "candidate " << i << " (w " << winding[i]
                                                        << ") shares the answer of " << d << " (w " << winding[d] << ")";
     }
-    EXPECT_EQ(firsts, groups);
-    return groups;
+    return firsts;
 }
 
 TEST(OverlappingFaces, MatchesBruteForceOnOverlappingBalls)
@@ -207,7 +226,7 @@ TEST(ClearEdgeGroups, GroupsDoNotDependOnEarlierCalls)
         Pairs pairs;
         s.tree.overlapping_slots(other.tree, region, pairs);
         Groups g;
-        s.tree.clear_edge_groups(s.vertices, other.tree, other.vertices, pairs, 0, candidates, g.decider, &g.path);
+        g.decider = deciders(s, other, pairs, 0, candidates, &g.path);
         return g;
     };
     // Each call on a thread of its own, then all on this one, one after the other.
@@ -238,9 +257,8 @@ TEST(ClearEdgeGroups, VerticesOnTheOtherSurfaceStandAlone)
     ASSERT_FALSE(candidates.empty());
     Pairs pairs;
     a.tree.overlapping_slots(b.tree, region, pairs);
-    std::vector<Index> decider;
     std::vector<double> path;
-    a.tree.clear_edge_groups(a.vertices, b.tree, b.vertices, pairs, 0, candidates, decider, &path);
+    const std::vector<Index> decider = deciders(a, b, pairs, 0, candidates, &path);
     int on_surface = 0;
     for (std::size_t i = 0; i < candidates.size(); ++i) {
         const Vec3 p = a.vertices.row(candidates[i]).transpose();
@@ -257,14 +275,12 @@ TEST(ClearEdgeGroups, VerticesOnTheOtherSurfaceStandAlone)
     Pairs reversed = pairs;
     for (auto& pair : reversed)
         std::swap(pair[0], pair[1]);
-    std::vector<Index> b_candidates, b_decider;
+    std::vector<Index> b_candidates;
     b.tree.vertices_in_box(b.vertices, region, b_candidates);
-    b.tree.clear_edge_groups(b.vertices, a.tree, a.vertices, pairs, 1, b_candidates, b_decider, &path);
+    const std::vector<Index> b_decider = deciders(b, a, pairs, 1, b_candidates, &path);
     for (std::size_t i = 0; i < b_candidates.size(); ++i)
         EXPECT_EQ(b_decider[i], static_cast<Index>(i)); // all of B's candidates lie on A's +x face
-    std::vector<Index> again;
-    b.tree.clear_edge_groups(b.vertices, a.tree, a.vertices, reversed, 0, b_candidates, again, &path);
-    EXPECT_EQ(again, b_decider);
+    EXPECT_EQ(deciders(b, a, reversed, 0, b_candidates, &path), b_decider);
 }
 
 } // namespace

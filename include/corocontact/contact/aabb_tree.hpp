@@ -166,16 +166,18 @@ public:
     ///                            every candidate; (this slot, other slot) when `column` is 0,
     ///                            (other slot, this slot) when it is 1
     /// @param[in] candidates      distinct vertices of this surface in that region
-    /// @param[out] decider        per candidate, the index into `candidates` of its group's first
-    ///                            candidate (itself for that one)
+    /// @param[out] group          per candidate, its group, 0 .. groups − 1, the groups numbered
+    ///                            in the order of their first candidates
+    /// @param[out] firsts         per group, the index into `candidates` of its first candidate
+    ///                            (ascending)
     /// @param[out] path           per candidate, an upper bound of the length of a path of clear
-    ///                            edges from its decider (0 for the decider), same unit as
-    ///                            positions; null: not computed
+    ///                            edges from its group's first candidate (0 for that one), same
+    ///                            unit as positions; null: not computed
     /// @return the number of groups
     Index clear_edge_groups(CRef<Positions> vertices, const AabbTree& other, CRef<Positions> other_vertices,
                             const std::vector<std::array<Index, 2>>& slot_pairs, int column,
-                            const std::vector<Index>& candidates, std::vector<Index>& decider,
-                            std::vector<double>* path) const;
+                            const std::vector<Index>& candidates, std::vector<Index>& group,
+                            std::vector<Index>& firsts, std::vector<double>* path) const;
 
     /// Nearest point of the surface to `point`.
     struct Nearest {
