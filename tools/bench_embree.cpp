@@ -329,6 +329,7 @@ void BM_AxisRayFrameInsideOnly(benchmark::State& state)
 struct PathTimes {
     std::vector<double> refit, detect; // seconds per frame
     double queries = 0.0, inside = 0.0, by_neighbour = 0.0;
+    long differing = 0; // (vertex, other body) answers that differ from the exact path's, all frames
 };
 
 double median(std::vector<double> v)
@@ -370,6 +371,7 @@ void summary(Index resolution, int frames, std::size_t threads)
     detail::EmbreeSceneSet scenes(sc.surfaces[0], detail::EmbreeBuild::REFIT);
     std::vector<double> embree_update;
     const int brute_frames = std::min(frames, resolution > 16 ? 4 : 16);
+    std::vector<ContactPoint> exact_points; // this frame's answers of the exact path (run first)
     for (int f = 0; f < frames; ++f) {
         const auto& nodes = sc.frames[static_cast<std::size_t>((f + 1) % FRAMES)];
         for (int p = 0; p < N_PATHS; ++p) {
@@ -385,25 +387,29 @@ void summary(Index resolution, int frames, std::size_t threads)
                             : p == BRUTE_INSIDE             ? DetectionMode::BRUTE_FORCE
                                                             : DetectionMode::EXACT;
             DetectionStats stats;
+            std::vector<ContactPoint> points;
             if (p == EMBREE || p == EMBREE_INSIDE) {
                 embree_update.push_back(seconds([&] { scenes.update(s); }));
                 pt.detect.push_back(seconds([&] {
-                    benchmark::DoNotOptimize(detail::detect_contacts_embree(s, scenes, settings, &stats, nullptr));
+                    points = detail::detect_contacts_embree(s, scenes, settings, &stats, nullptr);
                 }));
             } else if (p == EMBREE_TREE_DEPTH) { // Embree's inside tests, our tree's depth searches
                 embree_update.push_back(seconds([&] { scenes.update(s); }));
                 pt.detect.push_back(seconds([&] {
-                    benchmark::DoNotOptimize(detect_contacts(
+                    points = detect_contacts(
                         s,
                         [&](Index other, const Vec3& x) {
                             return scenes.inside_test(s[static_cast<std::size_t>(other)], other, x);
                         },
-                        &stats, true));
+                        &stats, true);
                 }));
             } else {
-                pt.detect.push_back(
-                    seconds([&] { benchmark::DoNotOptimize(detect_contacts(s, settings, &stats)); }));
+                pt.detect.push_back(seconds([&] { points = detect_contacts(s, settings, &stats); }));
             }
+            if (p == EXACT)
+                exact_points = points;
+            else
+                pt.differing += static_cast<long>(cross_check(exact_points, points).size());
             pt.queries += stats.candidate_vertices;
             pt.inside += stats.inside;
             pt.by_neighbour += stats.by_neighbour;
@@ -414,8 +420,8 @@ void summary(Index resolution, int frames, std::size_t threads)
                 "median wall time per frame over %d frames (brute force %d) ==\n",
                 sc.tets_per_sphere, static_cast<long>(sc.surfaces[0][0].faces.rows()), threads, frames,
                 brute_frames);
-    std::printf("%-26s %10s %10s %10s %12s %10s %10s %10s\n", "path", "refit ms", "update ms", "detect ms",
-                "frame ms", "queries", "Mqueries/s", "shared");
+    std::printf("%-26s %10s %10s %10s %12s %10s %10s %10s %10s\n", "path", "refit ms", "update ms", "detect ms",
+                "frame ms", "queries", "Mqueries/s", "shared", "≠ exact");
     std::vector<double> frame(N_PATHS);
     for (int p = 0; p < N_PATHS; ++p) {
         const PathTimes& pt = t[static_cast<std::size_t>(p)];
@@ -423,8 +429,9 @@ void summary(Index resolution, int frames, std::size_t threads)
         const double r = median(pt.refit), d = median(pt.detect), u = embree ? update : 0.0;
         frame[static_cast<std::size_t>(p)] = r + u + d;
         const double n = pt.queries / static_cast<double>(pt.detect.size());
-        std::printf("%-26s %10.3f %10.3f %10.3f %12.3f %10.0f %10.2f %10.0f\n", names[p], 1e3 * r, 1e3 * u,
-                    1e3 * d, 1e3 * (r + u + d), n, 1e-6 * n / d, pt.by_neighbour / static_cast<double>(pt.detect.size()));
+        std::printf("%-26s %10.3f %10.3f %10.3f %12.3f %10.0f %10.2f %10.0f %10ld\n", names[p], 1e3 * r, 1e3 * u,
+                    1e3 * d, 1e3 * (r + u + d), n, 1e-6 * n / d, pt.by_neighbour / static_cast<double>(pt.detect.size()),
+                    pt.differing);
     }
     // The reference point: Embree's update plus one plain first-hit ray (+x) per
     // candidate vertex, in parallel: not an inside test (no all-hit gathering, no degenerate
@@ -456,7 +463,8 @@ void summary(Index resolution, int frames, std::size_t threads)
                 "mid, narrow phase (+ nearest-point depth and normal unless 'inside only'), sorted output; "
                 "Mqueries/s = candidate vertices / detect time; shared = vertices that took a neighbour's "
                 "answer of another vertex of their group, joined by surface edges that meet no face of the other body (DetectionSettings::share_answers; 'no sharing' "
-                "tests each)\n");
+                "tests each); ≠ exact = (vertex, other body) answers of all frames that differ from the exact path's "
+                "(inside for one, outside for the other)\n");
     std::printf("ratio exact/Embree per frame, with depth:   %.3f  (refit+detect vs refit+update+detect; Embree's "
                 "depths by its point queries)\n",
                 frame[EXACT] / frame[EMBREE]);
