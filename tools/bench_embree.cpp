@@ -421,7 +421,7 @@ void summary(Index resolution, int frames, std::size_t threads)
                 sc.tets_per_sphere, static_cast<long>(sc.surfaces[0][0].faces.rows()), threads, frames,
                 brute_frames);
     std::printf("%-26s %10s %10s %10s %12s %10s %10s %10s %10s\n", "path", "refit ms", "update ms", "detect ms",
-                "frame ms", "queries", "Mqueries/s", "shared", "≠ exact");
+                "frame ms", "queries", "Mqueries/s", "shared", "differ");
     std::vector<double> frame(N_PATHS);
     for (int p = 0; p < N_PATHS; ++p) {
         const PathTimes& pt = t[static_cast<std::size_t>(p)];
@@ -463,7 +463,7 @@ void summary(Index resolution, int frames, std::size_t threads)
                 "mid, narrow phase (+ nearest-point depth and normal unless 'inside only'), sorted output; "
                 "Mqueries/s = candidate vertices / detect time; shared = vertices that took a neighbour's "
                 "answer of another vertex of their group, joined by surface edges that meet no face of the other body (DetectionSettings::share_answers; 'no sharing' "
-                "tests each); ≠ exact = (vertex, other body) answers of all frames that differ from the exact path's "
+                "tests each); differ = (vertex, other body) answers of all frames that differ from the exact path's "
                 "(inside for one, outside for the other)\n");
     std::printf("ratio exact/Embree per frame, with depth:   %.3f  (refit+detect vs refit+update+detect; Embree's "
                 "depths by its point queries)\n",

@@ -257,19 +257,23 @@ void AabbTree::build_edges(std::size_t vertex_count)
         }
 }
 
-// refit_node stores a box's min as four doubles, the fourth landing on max[0].
-static_assert(sizeof(Aabb) == 6 * sizeof(double) && sizeof(Vec3) == 3 * sizeof(double),
-              "Aabb is min then max, three doubles each, nothing between");
-
 void AabbTree::refit_node(const double* data, std::ptrdiff_t stride, Index n)
 {
     WideNode& w = m_nodes[static_cast<std::size_t>(n)];
     const __m128 abs_mask = _mm_castsi128_ps(_mm_set1_epi32(0x7fffffff));
     const __m128 ulp = _mm_set1_ps(0x1p-23f), tiny = _mm_set1_ps(0x1p-126f);
+    const __m128 largest = _mm_set1_ps(std::numeric_limits<float>::max());
+    const __m128 lowest = _mm_set1_ps(-std::numeric_limits<float>::max());
     // A face's box (l, h), x, y, z in lanes 0..2, rounded outward to floats (detail::float_down
-    // / float_up, three lanes at once).
-    const auto round_down = [&](__m128 l) { return _mm_sub_ps(l, _mm_add_ps(_mm_mul_ps(_mm_and_ps(l, abs_mask), ulp), tiny)); };
-    const auto round_up = [&](__m128 h) { return _mm_add_ps(h, _mm_add_ps(_mm_mul_ps(_mm_and_ps(h, abs_mask), ulp), tiny)); };
+    // / float_up, three lanes at once). A bound beyond the float range converts to ±∞, and the
+    // step outward from there gives NaN: min/max return their second operand then, the largest
+    // finite float of that sign, so no NaN reaches a node's union.
+    const auto round_down = [&](__m128 l) {
+        return _mm_min_ps(_mm_sub_ps(l, _mm_add_ps(_mm_mul_ps(_mm_and_ps(l, abs_mask), ulp), tiny)), largest);
+    };
+    const auto round_up = [&](__m128 h) {
+        return _mm_max_ps(_mm_add_ps(h, _mm_add_ps(_mm_mul_ps(_mm_and_ps(h, abs_mask), ulp), tiny)), lowest);
+    };
     // Lane k's box, x, y, z, 0 in one register (empty for the unused lanes), four of them
     // transposed into the node's rows at the end; the lanes unrolled, so that the boxes stay in
     // registers.

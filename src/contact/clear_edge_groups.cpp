@@ -53,10 +53,10 @@ public:
         const __m256d miss = _mm256_or_pd(_mm256_cmp_pd(min, m_hi, _CMP_GT_OQ), _mm256_cmp_pd(max, m_lo, _CMP_LT_OQ));
         return _mm256_movemask_pd(miss) != 0;
 #else
-        bool miss = false;
+        bool miss = false; // min/max in the AVX2 operand order
         for (int j = 0; j < 3; ++j)
-            miss = miss | (std::min(std::min(a[j], b[j]), c[j]) > m_hi[j]) |
-                   (std::max(std::max(a[j], b[j]), c[j]) < m_lo[j]);
+            miss = miss | (std::min(c[j], std::min(b[j], a[j])) > m_hi[j]) |
+                   (std::max(c[j], std::max(b[j], a[j])) < m_lo[j]);
         return miss;
 #endif
     }
@@ -128,6 +128,7 @@ Index AabbTree::clear_edge_groups(CRef<Positions> vertices, const AabbTree& othe
         scratch.queue.resize(n);
     group.resize(n);
     firsts.clear();
+    firsts.reserve(n); // no allocation once the states below are set
     if (path)
         path->resize(n);
     const PairedIdReset reset{slot_pairs, mine};

@@ -90,7 +90,7 @@ public:
         const Index* fa = a.slot_vertices + 3 * slot_a;
         const Index* fb = b.slot_vertices + 3 * slot_b;
 #if defined(__AVX2__)
-        // (x, y, z, 0) per corner: the fourth lanes compare 0 ≤ 0, never a miss; a NaN is one.
+        // (x, y, z, 0) per corner: the fourth lanes compare 0 ≤ 0, never a miss.
         const auto corner = [&](const FaceBoxes& s, Index v) { return _mm256_maskload_pd(s.data + s.stride * v, xyz()); };
         const __m256d a0 = corner(a, fa[0]), a1 = corner(a, fa[1]), a2 = corner(a, fa[2]);
         const __m256d b0 = corner(b, fb[0]), b1 = corner(b, fb[1]), b2 = corner(b, fb[2]);
@@ -102,16 +102,16 @@ public:
                                          m_hi);
         return _mm256_movemask_pd(_mm256_cmp_pd(lo, hi, _CMP_LE_OQ)) == 0xF;
 #else
-        bool meet = true;
+        bool meet = true; // min/max in the AVX2 operand order
         for (int j = 0; j < 3; ++j) {
-            const double* a0 = a.data + a.stride * fa[0] + j;
-            const double* a1 = a.data + a.stride * fa[1] + j;
-            const double* a2 = a.data + a.stride * fa[2] + j;
-            const double* b0 = b.data + b.stride * fb[0] + j;
-            const double* b1 = b.data + b.stride * fb[1] + j;
-            const double* b2 = b.data + b.stride * fb[2] + j;
-            const double lo = std::max({std::min({*a0, *a1, *a2}), std::min({*b0, *b1, *b2}), m_region.min[j]});
-            const double hi = std::min({std::max({*a0, *a1, *a2}), std::max({*b0, *b1, *b2}), m_region.max[j]});
+            const double a0 = a.data[a.stride * fa[0] + j], a1 = a.data[a.stride * fa[1] + j];
+            const double a2 = a.data[a.stride * fa[2] + j];
+            const double b0 = b.data[b.stride * fb[0] + j], b1 = b.data[b.stride * fb[1] + j];
+            const double b2 = b.data[b.stride * fb[2] + j];
+            const double lo = std::max(m_region.min[j], std::max(std::min(b2, std::min(b1, b0)),
+                                                                 std::min(a2, std::min(a1, a0))));
+            const double hi = std::min(m_region.max[j], std::min(std::max(b2, std::max(b1, b0)),
+                                                                 std::max(a2, std::max(a1, a0))));
             meet = meet & (lo <= hi);
         }
         return meet;

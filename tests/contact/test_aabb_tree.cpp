@@ -169,6 +169,49 @@ TEST(AabbTree, QueriesEqualBruteForceOnRandomTriangles)
     expect_queries_equal_brute_force(tree, m, rng, 300);
 }
 
+TEST(AabbTree, FacesBeyondTheFloatRangeHideNoOtherFace)
+{
+    // Random triangles near the origin and a few lying wholly beyond the float range (x from
+    // 10³⁹ on, or below −10³⁹): their float boxes are clamped to the largest float, and no NaN
+    // may reach a node's box and hide the faces beside them.
+    std::mt19937 rng(17);
+    SurfaceMesh m = random_triangles(60, rng);
+    for (Index f = 0; f < 6; ++f)
+        for (int c = 0; c < 3; ++c)
+            m.vertices(m.faces(f, c), 0) = (f % 2 == 0 ? 1.0 : -1.0) * (1e39 + 1e38 * c + 1e37 * f);
+    AabbTree tree;
+    tree.build(m.vertices, m.faces);
+    const auto brute_force = [&](const Aabb& box) {
+        std::vector<Index> want;
+        for (Index f = 0; f < m.faces.rows(); ++f)
+            if (face_box(m, f).overlaps(box))
+                want.push_back(f);
+        return want;
+    };
+    std::vector<Index> got;
+    const Aabb near{Vec3(-1, -1, -1), Vec3(2, 2, 2)};
+    const Aabb far{Vec3(5e38, -1e300, -1e300), Vec3(1e300, 1e300, 1e300)};
+    const Aabb far_below{Vec3(-1e300, -1e300, -1e300), Vec3(-5e38, 1e300, 1e300)};
+    for (const Aabb& box : {near, far, far_below}) {
+        tree.faces_overlapping(m.vertices, box, got);
+        const std::vector<Index> want = brute_force(box);
+        ASSERT_FALSE(want.empty());
+        EXPECT_EQ(got, want);
+    }
+    // Axis lines along x through each face's centroid meet at least that face.
+    for (Index f = 0; f < m.faces.rows(); ++f) {
+        const Vec3 c = (vertex(m, f, 0) + vertex(m, f, 1) + vertex(m, f, 2)) / 3.0;
+        bool met = false;
+        tree.faces_on_axis_line(m.vertices, c, 0, 0.0, [&](Index g) { met = met || g == f; });
+        EXPECT_TRUE(met) << "face " << f;
+    }
+    Aabb bounds;
+    for (Index f = 0; f < m.faces.rows(); ++f)
+        bounds.extend(face_box(m, f));
+    EXPECT_EQ(tree.bounds().min, bounds.min);
+    EXPECT_EQ(tree.bounds().max, bounds.max);
+}
+
 TEST(AabbTree, NodesHoldFourChildrenButOnePerLevel)
 {
     // A node with four children adds three to the count of things to hold, so F faces need at

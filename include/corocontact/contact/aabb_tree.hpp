@@ -259,10 +259,10 @@ private:
         const double* a = data + stride * fv[0];
         const double* b = data + stride * fv[1];
         const double* c = data + stride * fv[2];
-        Aabb box;
+        Aabb box; // in the operand order of the SIMD min/max elsewhere (the same with a NaN)
         for (int j = 0; j < 3; ++j) {
-            box.min[j] = std::min(std::min(a[j], b[j]), c[j]);
-            box.max[j] = std::max(std::max(a[j], b[j]), c[j]);
+            box.min[j] = std::min(c[j], std::min(b[j], a[j]));
+            box.max[j] = std::max(c[j], std::max(b[j], a[j]));
         }
         return box;
     }
@@ -309,16 +309,18 @@ private:
 
 namespace detail {
 /// `x` rounded to a float no greater (down) or no smaller (up): the nearest float, then a step
-/// of at least one ulp outward (a few ulps looser than needed, branch-free).
+/// of at least one ulp outward (a few ulps looser than needed). A value above the float range
+/// rounds down to the largest float, one below it up to the lowest (the step from ±∞ would give
+/// NaN, which fmin/fmax drop).
 inline float float_down(double x)
 {
     const float f = static_cast<float>(x);
-    return f - (std::abs(f) * 0x1p-23f + 0x1p-126f);
+    return std::fmin(f - (std::abs(f) * 0x1p-23f + 0x1p-126f), std::numeric_limits<float>::max());
 }
 inline float float_up(double x)
 {
     const float f = static_cast<float>(x);
-    return f + (std::abs(f) * 0x1p-23f + 0x1p-126f);
+    return std::fmax(f + (std::abs(f) * 0x1p-23f + 0x1p-126f), -std::numeric_limits<float>::max());
 }
 /// A float threshold no smaller than `x` ≥ 0, with a relative margin of 2⁻¹⁸ (covers the
 /// rounding of the single precision lower bounds compared against it); +∞ from 10³⁸ on.
