@@ -61,71 +61,6 @@ WideBox clipped(const WideBox& box, const WideBox& region)
     return w;
 }
 
-/// The faces of one surface by slot, to compute their exact boxes from the corners: the trees
-/// store single precision boxes only.
-struct FaceBoxes {
-    const double* data;
-    std::ptrdiff_t stride;
-    const Index* slot_vertices; // 3 per slot
-};
-
-/// A region's exact box, against which the exact boxes of two faces are tested.
-class RegionBox {
-public:
-    explicit RegionBox(const Aabb& region) : m_region(region)
-    {
-#if defined(__AVX2__)
-        m_lo = _mm256_maskload_pd(region.min.data(), xyz());
-        m_hi = _mm256_maskload_pd(region.max.data(), xyz());
-#endif
-    }
-
-    /// Whether the exact boxes of face slot_a of `a`, face slot_b of `b` and the region have a
-    /// point in common (closed): on each axis the largest lower bound is at most the smallest
-    /// upper bound (the same as the three pairwise tests for boxes that are not empty;
-    /// overlapping_slots() returns early on an empty region). Without branches, as the outcome
-    /// is hard to predict.
-    bool meets_both(const FaceBoxes& a, Index slot_a, const FaceBoxes& b, Index slot_b) const
-    {
-        const Index* fa = a.slot_vertices + 3 * slot_a;
-        const Index* fb = b.slot_vertices + 3 * slot_b;
-#if defined(__AVX2__)
-        // (x, y, z, 0) per corner: the fourth lanes compare 0 ≤ 0, never a miss.
-        const auto corner = [&](const FaceBoxes& s, Index v) { return _mm256_maskload_pd(s.data + s.stride * v, xyz()); };
-        const __m256d a0 = corner(a, fa[0]), a1 = corner(a, fa[1]), a2 = corner(a, fa[2]);
-        const __m256d b0 = corner(b, fb[0]), b1 = corner(b, fb[1]), b2 = corner(b, fb[2]);
-        const __m256d lo = _mm256_max_pd(_mm256_max_pd(_mm256_min_pd(_mm256_min_pd(a0, a1), a2),
-                                                       _mm256_min_pd(_mm256_min_pd(b0, b1), b2)),
-                                         m_lo);
-        const __m256d hi = _mm256_min_pd(_mm256_min_pd(_mm256_max_pd(_mm256_max_pd(a0, a1), a2),
-                                                       _mm256_max_pd(_mm256_max_pd(b0, b1), b2)),
-                                         m_hi);
-        return _mm256_movemask_pd(_mm256_cmp_pd(lo, hi, _CMP_LE_OQ)) == 0xF;
-#else
-        bool meet = true; // min/max in the AVX2 operand order
-        for (int j = 0; j < 3; ++j) {
-            const double a0 = a.data[a.stride * fa[0] + j], a1 = a.data[a.stride * fa[1] + j];
-            const double a2 = a.data[a.stride * fa[2] + j];
-            const double b0 = b.data[b.stride * fb[0] + j], b1 = b.data[b.stride * fb[1] + j];
-            const double b2 = b.data[b.stride * fb[2] + j];
-            const double lo = std::max(m_region.min[j], std::max(std::min(b2, std::min(b1, b0)),
-                                                                 std::min(a2, std::min(a1, a0))));
-            const double hi = std::min(m_region.max[j], std::min(std::max(b2, std::max(b1, b0)),
-                                                                 std::max(a2, std::max(a1, a0))));
-            meet = meet & (lo <= hi);
-        }
-        return meet;
-#endif
-    }
-
-private:
-    Aabb m_region;
-#if defined(__AVX2__)
-    static __m256i xyz() { return _mm256_setr_epi64x(-1, -1, -1, 0); } // 3 doubles: no load past them
-    __m256d m_lo, m_hi;
-#endif
-};
-
 #if defined(__AVX2__)
 /// Bit 4i + k set: lane i of `a` and lane k of `b` have float boxes that meet each other and
 /// `region` (closed), all sixteen pairs at once. Three boxes meet when, on each axis, the largest
@@ -199,14 +134,16 @@ void AabbTree::overlapping_faces(CRef<Positions> vertices, const AabbTree& other
                                  const Aabb& region, Pairs& pairs) const
 {
     overlapping_slots(other, region, pairs);
-    // The pairs of the float boxes, narrowed to those of the exact boxes.
-    const FaceBoxes boxes_a{vertices.data(), vertices.outerStride(), m_slot_vertices.data()};
-    const FaceBoxes boxes_b{other_vertices.data(), other_vertices.outerStride(), other.m_slot_vertices.data()};
-    const RegionBox exact_region(region);
+    // The pairs of the float boxes, narrowed to those of the exact boxes (a rare rejection: no
+    // need for speed here, the detector takes the float pairs).
     std::size_t kept = 0;
-    for (const auto& pair : pairs)
-        if (exact_region.meets_both(boxes_a, pair[0], boxes_b, pair[1]))
-            pairs[kept++] = {m_order[static_cast<std::size_t>(pair[0])], other.m_order[static_cast<std::size_t>(pair[1])]};
+    for (const auto& [slot_a, slot_b] : pairs) {
+        const Aabb box_a = slot_box(vertices.data(), vertices.outerStride(), static_cast<std::size_t>(slot_a));
+        const Aabb box_b = other.slot_box(other_vertices.data(), other_vertices.outerStride(),
+                                          static_cast<std::size_t>(slot_b));
+        if (box_a.overlaps(box_b) && box_a.overlaps(region) && box_b.overlaps(region))
+            pairs[kept++] = {m_order[static_cast<std::size_t>(slot_a)], other.m_order[static_cast<std::size_t>(slot_b)]};
+    }
     pairs.resize(kept);
 }
 
