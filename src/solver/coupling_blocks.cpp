@@ -15,15 +15,16 @@ void CouplingBlocks::reset(Index count)
     m_size = 0;
 }
 
-void CouplingBlocks::finish(const RowChunks& chunks)
+void CouplingBlocks::finish(const RowChunks& chunks, const std::vector<Index>* column_order)
 {
     // Sort keys (row, column, contribution): unique, so the order is fixed whatever sort runs.
     const auto count = static_cast<Index>(m_entries.size());
     m_keys.resize(at(count));
     for (Index i = 0; i < count; ++i) {
         const Entry& e = m_entries[at(i)];
+        const Index column = column_order ? (*column_order)[at(e.column)] : e.column;
         m_keys[at(i)] = {(static_cast<std::uint64_t>(static_cast<std::uint32_t>(e.row)) << 32) |
-                             static_cast<std::uint32_t>(e.column),
+                             static_cast<std::uint32_t>(column),
                          i};
     }
     std::sort(m_keys.begin(), m_keys.end());

@@ -35,9 +35,20 @@ void PcgSolver::build_preconditioner(const SceneMatrix& a, PcgPreconditioner kin
 double PcgSolver::sum_chunks(const std::vector<double>& chunk_dots) const
 {
     double sum = 0.0;
+    if (m_exchange) {
+        m_exchange->sum_chunks(chunk_dots.data(), 1, &sum);
+        return sum;
+    }
     for (const double d : chunk_dots)
         sum += d;
     return sum;
+}
+
+void PcgSolver::multiply(const SceneMatrix& a, double* x, double* y, double* chunk_dots) const
+{
+    if (m_exchange)
+        m_exchange->update_ghosts(x);
+    a.multiply(x, y, chunk_dots);
 }
 
 PcgSolver::Sums PcgSolver::residual_pass(const RowChunks& chunks, const double* b, double alpha, double* x)
@@ -73,12 +84,20 @@ PcgSolver::Sums PcgSolver::residual_pass(const RowChunks& chunks, const double* 
             sums.rr += r[i] * r[i];
             sums.rz += r[i] * z[i];
         }
-        m_chunk_sums[at(c)] = sums;
+        m_chunk_sums[2 * at(c)] = sums.rr;
+        m_chunk_sums[2 * at(c) + 1] = sums.rz;
     });
     Sums total;
-    for (const Sums& sums : m_chunk_sums) {
-        total.rr += sums.rr;
-        total.rz += sums.rz;
+    if (m_exchange) {
+        double totals[2] = {0.0, 0.0};
+        m_exchange->sum_chunks(m_chunk_sums.data(), 2, totals);
+        total.rr = totals[0];
+        total.rz = totals[1];
+        return total;
+    }
+    for (std::size_t c = 0; c < m_chunk_sums.size(); c += 2) {
+        total.rr += m_chunk_sums[c];
+        total.rz += m_chunk_sums[c + 1];
     }
     return total;
 }
@@ -88,17 +107,19 @@ PcgResult PcgSolver::solve(const BsrMatrix& a, CRef<VecX> b, Eigen::Ref<VecX> x,
     return solve(SceneMatrix({&a}), b, x, settings);
 }
 
-PcgResult PcgSolver::solve(const SceneMatrix& a, CRef<VecX> b, Eigen::Ref<VecX> x, const PcgSettings& settings)
+PcgResult PcgSolver::solve(const SceneMatrix& a, CRef<VecX> b, Eigen::Ref<VecX> x, const PcgSettings& settings,
+                           SceneExchange* exchange)
 {
     const Index n = a.num_dofs();
     CORO_ASSERT(b.size() == n && x.size() == n);
     const RowChunks& chunks = a.chunks();
+    m_exchange = exchange;
     m_r.resize(n);
     m_z.resize(n);
-    m_p.resize(n);
+    m_p.resize(n + (exchange ? 3 * exchange->num_ghost_rows() : 0));
     m_q.resize(n);
     m_chunk_dots.resize(at(chunks.num_chunks()));
-    m_chunk_sums.resize(at(chunks.num_chunks()));
+    m_chunk_sums.resize(2 * at(chunks.num_chunks()));
 
     PcgResult result;
     for_each_chunk(chunks, [&](Index c, Index begin, Index end) {
@@ -113,18 +134,23 @@ PcgResult PcgSolver::solve(const SceneMatrix& a, CRef<VecX> b, Eigen::Ref<VecX> 
     }
     build_preconditioner(a, settings.preconditioner);
 
-    a.multiply(x.data(), m_r.data(), nullptr);
+    if (exchange) { // x has no ghost rows: multiply a copy that has
+        m_p.head(n) = x;
+        multiply(a, m_p.data(), m_r.data(), nullptr);
+    } else {
+        a.multiply(x.data(), m_r.data(), nullptr);
+    }
     Sums sums = residual_pass(chunks, b.data(), 0.0, x.data()); // r = b − A x, z = M⁻¹ r
     CORO_CHECK(std::isfinite(sums.rr) && std::isfinite(sums.rz), NumericalError,
                "PCG: the initial residual is not finite (rᵀr = " << sums.rr << ", rᵀz = " << sums.rz << ")");
     double r_norm = std::sqrt(sums.rr);
     double rz = sums.rz;
-    m_p = m_z;
+    m_p.head(n) = m_z;
 
     const double target = settings.tolerance * b_norm;
     Index iteration = 0;
     while (r_norm > target && iteration < settings.max_iterations) {
-        a.multiply(m_p.data(), m_q.data(), m_chunk_dots.data());
+        multiply(a, m_p.data(), m_q.data(), m_chunk_dots.data());
         const double pq = sum_chunks(m_chunk_dots);
         CORO_CHECK(pq > 0.0, NumericalError,
                    "PCG: pᵀAp = " << pq << " at iteration " << iteration
@@ -137,7 +163,7 @@ PcgResult PcgSolver::solve(const SceneMatrix& a, CRef<VecX> b, Eigen::Ref<VecX> 
         r_norm = std::sqrt(sums.rr);
         if (r_norm <= target)
             break;
-        xpby(m_z, sums.rz / rz, m_p);
+        xpby(m_z, sums.rz / rz, m_p.head(n));
         rz = sums.rz;
     }
     result.iterations = iteration;

@@ -55,7 +55,9 @@ public:
     void assemble(double dt, const Vec3& gravity, const std::vector<VecX>& contact_forces);
 
     /// Step part 3: one PCG over the scene.
-    PcgResult solve(const PcgSettings& settings);
+    /// @param[in] exchange  null, or the halo and chunk sums of a scene spread over processes
+    ///                      (see PcgSolver::solve; collective then)
+    PcgResult solve(const PcgSettings& settings, SceneExchange* exchange = nullptr);
 
     /// Step part 4: v⁺ to the bodies and x⁺ = x + h v⁺.
     /// @throws NumericalError naming the body and node (mesh file order) of the first

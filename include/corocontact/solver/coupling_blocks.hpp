@@ -32,7 +32,11 @@ public:
     /// Sorts the contributions by (row, column), sums repeated blocks in contribution order (so
     /// the result depends only on that order), and indexes them by the chunks' rows. Must be
     /// called after the entries are written and before any other query.
-    void finish(const RowChunks& chunks);
+    /// @param[in] column_order  null, or for every column index the key by which the blocks of a
+    ///                          row are ordered (a process of a distributed run numbers its
+    ///                          columns locally but orders them as one process numbers them;
+    ///                          the order decides the bits of a row's product)
+    void finish(const RowChunks& chunks, const std::vector<Index>* column_order = nullptr);
 
     /// Distinct blocks after finish(), sorted by (row, column).
     Index size() const { return m_size; }

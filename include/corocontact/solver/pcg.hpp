@@ -3,6 +3,7 @@
 /// @brief Preconditioned conjugate gradients on a scene matrix, deterministic for any thread count.
 
 #include <corocontact/solver/bsr_matrix.hpp>
+#include <corocontact/solver/scene_exchange.hpp>
 #include <corocontact/solver/scene_matrix.hpp>
 
 #include <vector>
@@ -34,14 +35,24 @@ struct PcgResult {
 /// + βp. Every dot product adds the chunk partials in chunk order, so the iterates are bitwise
 /// the same for any thread count. Once its vectors have the scene's size, a solve allocates
 /// nothing.
+///
+/// Distributed (an exchange given): this process holds the rows of its bodies; before each
+/// product the ghost rows of the multiplied vector are updated, and every dot product adds the
+/// chunk partials of all processes in the global chunk order, so the iterates are bitwise
+/// those of one process holding every body.
 class PcgSolver {
 public:
     /// Solves A x = b for symmetric positive definite A, warm-started from the given x.
-    /// @param[in] a       the scene matrix, #N×#N blocks, SPD (its coupling finished)
+    /// @param[in] a       the scene matrix, #N×#N blocks, SPD (its coupling finished); with an
+    ///                    exchange, this process's rows and coupling columns up to N + G
     /// @param[in] b       #3N right-hand side
     /// @param[in,out] x   #3N initial guess on entry, solution on exit
+    /// @param[in] exchange  null (one process), or the halo and chunk sums of a distributed
+    ///                    scene; then the call is collective, and every process returns the same
+    ///                    result or throws the same error
     /// @throws NumericalError if a non-finite value appears (A not SPD, NaN in b)
-    PcgResult solve(const SceneMatrix& a, CRef<VecX> b, Eigen::Ref<VecX> x, const PcgSettings& settings);
+    PcgResult solve(const SceneMatrix& a, CRef<VecX> b, Eigen::Ref<VecX> x, const PcgSettings& settings,
+                    SceneExchange* exchange = nullptr);
 
     /// Solves with one body's matrix (upper storage) as a scene of one body.
     PcgResult solve(const BsrMatrix& a, CRef<VecX> b, Eigen::Ref<VecX> x, const PcgSettings& settings);
@@ -55,15 +66,19 @@ private:
     /// One fused pass over the nodes: either r = b − r (r holding A x) when `b` is given, or
     /// x += αp, r −= αq; then z = M⁻¹ r, and r·r, r·z summed per chunk, then in chunk order.
     Sums residual_pass(const RowChunks& chunks, const double* b, double alpha, double* x);
-    /// Σ_c chunk_dots[c] in chunk order.
+    /// Σ_c chunk_dots[c] in chunk order (of all processes with an exchange).
     double sum_chunks(const std::vector<double>& chunk_dots) const;
+    /// y = A x; with an exchange, x's ghost rows are updated first.
+    void multiply(const SceneMatrix& a, double* x, double* y, double* chunk_dots) const;
 
     PcgPreconditioner m_kind = PcgPreconditioner::JACOBI;
     std::vector<Block3> m_inverse_blocks; // BLOCK_JACOBI: one per node
     VecX m_inverse_diagonal;              // JACOBI: one per DOF
-    VecX m_r, m_z, m_p, m_q;
+    VecX m_r, m_z, m_q;
+    VecX m_p;                             // #3(N + G): the multiplied vector, with ghost rows
     std::vector<double> m_chunk_dots;     // one partial per chunk
-    std::vector<Sums> m_chunk_sums;       // one pair of partials per chunk
+    std::vector<double> m_chunk_sums;     // two partials per chunk: r·r, r·z
+    SceneExchange* m_exchange = nullptr;  // of the solve in progress
 };
 
 } // namespace coro
