@@ -1,6 +1,7 @@
 #include <corocontact/contact/detector.hpp>
 
 #include <corocontact/contact/broad_phase.hpp>
+#include <corocontact/core/error.hpp>
 
 #include "detection_pass.hpp"
 #include "grouped_inside_tests.hpp"
@@ -133,8 +134,16 @@ ContactPoint make_contact_point(const std::vector<ContactSurface>& surfaces, Ind
 std::vector<ContactPoint> detect_contacts(const std::vector<ContactSurface>& surfaces,
                                           const DetectionSettings& settings, DetectionStats* stats)
 {
+    return detect_contacts(surfaces, overlapping_surfaces(surfaces), settings, stats);
+}
+
+std::vector<ContactPoint> detect_contacts(const std::vector<ContactSurface>& surfaces,
+                                          const std::vector<std::pair<Index, Index>>& pairs,
+                                          const DetectionSettings& settings, DetectionStats* stats)
+{
+    CORO_ASSERT(std::is_sorted(pairs.begin(), pairs.end()));
     if (!settings.share_answers || settings.mode != DetectionMode::EXACT) {
-        const std::vector<PairCandidates> candidates = contact_candidates(surfaces, settings.mode);
+        const std::vector<PairCandidates> candidates = pair_candidates(surfaces, pairs, settings.mode);
         return run_detection(
             surfaces, candidates,
             [&](std::size_t k, const Vec3* points, Index count, InsideTest* results) {
@@ -147,7 +156,6 @@ std::vector<ContactPoint> detect_contacts(const std::vector<ContactSurface>& sur
 
     // The mid phase and the face pairs of the groups need only the broad phase: one parallel
     // phase for both (on two threads, each phase of its own left a thread waiting).
-    const auto pairs = overlapping_surfaces(surfaces);
     std::vector<PairCandidates> candidates;
     std::vector<detail::SlotPairs> slot_pairs;
     tbb::parallel_invoke([&] { candidates = pair_candidates(surfaces, pairs, settings.mode); },

@@ -6,6 +6,7 @@
 #include <corocontact/contact/contact_surface.hpp>
 
 #include <functional>
+#include <utility>
 #include <vector>
 
 namespace coro {
@@ -60,6 +61,14 @@ struct DetectionSettings {
 /// same surfaces.
 /// @param[in] surfaces  one per body, trees refit to the current positions
 std::vector<ContactPoint> detect_contacts(const std::vector<ContactSurface>& surfaces,
+                                          const DetectionSettings& settings, DetectionStats* stats = nullptr);
+
+/// detect_contacts() of the given surface pairs only, both directions of each: the caller ran
+/// the broad phase (e.g. one process of a distributed run, which detects the pairs it owns).
+/// The contacts of a pair do not depend on the other pairs or surfaces.
+/// @param[in] pairs  (a, b) with a < b, sorted ascending, no repeats
+std::vector<ContactPoint> detect_contacts(const std::vector<ContactSurface>& surfaces,
+                                          const std::vector<std::pair<Index, Index>>& pairs,
                                           const DetectionSettings& settings, DetectionStats* stats = nullptr);
 
 /// A nearest-point search supplied by the caller: nearest(other, point, distance_bound) must
