@@ -24,7 +24,6 @@
 
 #include <CLI/CLI.hpp>
 #include <tbb/global_control.h>
-#include <tbb/info.h>
 #include <tbb/task_arena.h>
 
 #include <sys/resource.h>
@@ -322,7 +321,8 @@ int detect_case(const DetectOptions& options)
     return 0;
 }
 
-/// "closed and oriented, genus 1, 1 piece" or what is wrong with it.
+/// "closed, consistently oriented, 1 piece, Euler characteristic 0, genus 1" or what is wrong,
+/// then the counts of open, non-manifold and misoriented edges and pinch vertices.
 std::string describe_topology(const coro::SurfaceTopology& t)
 {
     const coro::SurfaceCheck& edges = t.edge_check;
