@@ -71,7 +71,7 @@ CLI::Validator whole_number(long long min, long long max)
                 return expected;
             return "";
         },
-        "INT in [" + std::to_string(min) + ", " + std::to_string(max) + "]");
+        min == 1 ? "POSITIVE" : "FROM " + std::to_string(min)); // --help: "INT:POSITIVE"
 }
 
 constexpr long long INDEX_MAX = std::numeric_limits<coro::Index>::max();
