@@ -116,17 +116,17 @@ public:
     void set_first(long first) { m_first = first; }
 
     /// What is being done before the first step (loading a body, building trees): on a
-    /// terminal it replaces the line; otherwise a plain line at most every 5 s.
+    /// terminal it replaces the line (no clock: it would stand still until the next stage);
+    /// otherwise a plain line with the time since the start, at most every 5 s.
     void status(const std::string& what)
     {
         if (!m_enabled)
             return;
         const auto now = Clock::now();
-        const std::string text = "loading: " + what + " (" + format_seconds(seconds(m_start, now)) + ")";
         if (m_terminal) {
-            draw(cut(text, terminal_width(fileno(m_out)) - 1));
+            draw(cut("loading: " + what, terminal_width(fileno(m_out)) - 1));
         } else if (seconds(m_last_print, now) >= 5.0) {
-            std::fprintf(m_out, "%s\n", text.c_str());
+            std::fprintf(m_out, "loading, %s: %s\n", format_seconds(seconds(m_start, now)).c_str(), what.c_str());
             std::fflush(m_out);
             m_last_print = now;
         }
