@@ -99,12 +99,12 @@ std::string to_lower(std::string s)
 
 /// File stems for the blocks of one frame: sanitized, unique even on case-insensitive file
 /// systems ("_2", "_3", ... appended on a clash).
-std::vector<std::string> block_file_stems(const std::vector<FrameBlock>& blocks)
+std::vector<std::string> block_file_stems(const std::vector<std::string>& names)
 {
     std::vector<std::string> stems;
     std::set<std::string> taken; // lower case
-    for (const FrameBlock& b : blocks) {
-        const std::string base = sanitize_file_stem(b.name);
+    for (const std::string& name : names) {
+        const std::string base = sanitize_file_stem(name);
         std::string stem = base;
         for (int k = 2; taken.count(to_lower(stem)) != 0; ++k)
             stem = base + "_" + std::to_string(k);
@@ -375,8 +375,19 @@ fs::path VtkSeriesWriter::pvd_path() const { return m_dir / (m_name + ".pvd"); }
 
 void VtkSeriesWriter::write_frame(Index step, double time, const std::vector<FrameBlock>& blocks)
 {
-    validate_frame(step, time, blocks);
+    // The blocks first, then the .vtm that references them, then the .pvd: whatever is
+    // listed is complete.
+    std::vector<std::string> names;
+    for (const FrameBlock& block : blocks)
+        names.push_back(block.name);
+    write_blocks(step, names, blocks);
+    list_frame(step, time, names);
+}
 
+void VtkSeriesWriter::write_blocks(Index step, const std::vector<std::string>& names,
+                                   const std::vector<FrameBlock>& blocks)
+{
+    validate_frame(step, 0.0, blocks);
     const std::string stem = frame_stem(m_name, step);
     const fs::path block_dir = m_dir / stem;
     std::error_code ec;
@@ -384,22 +395,29 @@ void VtkSeriesWriter::write_frame(Index step, double time, const std::vector<Fra
     CORO_CHECK(!ec && fs::is_directory(block_dir), InputError,
                block_dir.string() << ": cannot create the frame directory"
                                   << (ec ? " (" + ec.message() + ")" : std::string()));
+    const std::vector<std::string> file_stems = block_file_stems(names);
+    for (const FrameBlock& block : blocks) {
+        const auto name = std::find(names.begin(), names.end(), block.name);
+        if (name == names.end())
+            invalid("block '" + block.name + "' of step " + std::to_string(step) + " is not among the frame's names");
+        write_vtu(block, block_dir / (file_stems[static_cast<std::size_t>(name - names.begin())] + ".vtu"));
+    }
+}
 
-    // The blocks first, then the .vtm that references them, then the .pvd: whatever is
-    // listed is complete.
-    const std::vector<std::string> file_stems = block_file_stems(blocks);
+void VtkSeriesWriter::list_frame(Index step, double time, const std::vector<std::string>& names)
+{
+    if (!std::isfinite(time))
+        invalid("time of step " + std::to_string(step) + " is not finite");
+    const std::string stem = frame_stem(m_name, step);
+    const std::vector<std::string> file_stems = block_file_stems(names);
     std::ostringstream vtm;
     vtm << "<?xml version=\"1.0\"?>\n"
         << "<VTKFile type=\"vtkMultiBlockDataSet\" version=\"1.0\" byte_order=\"LittleEndian\" "
            "header_type=\"UInt64\">\n"
         << "  <vtkMultiBlockDataSet>\n";
-    for (std::size_t i = 0; i < blocks.size(); ++i) {
-        const std::string file = file_stems[i] + ".vtu";
-        write_vtu(blocks[i], block_dir / file);
-        vtm << "    <DataSet index=\"" << std::to_string(i) << "\" name=\""
-            << xml_escape(blocks[i].name) << "\" file=\"" << xml_escape(stem + "/" + file)
-            << "\"/>\n";
-    }
+    for (std::size_t i = 0; i < names.size(); ++i)
+        vtm << "    <DataSet index=\"" << std::to_string(i) << "\" name=\"" << xml_escape(names[i])
+            << "\" file=\"" << xml_escape(stem + "/" + file_stems[i] + ".vtu") << "\"/>\n";
     vtm << "  </vtkMultiBlockDataSet>\n"
         << "</VTKFile>\n";
     const std::string vtm_file = stem + ".vtm";

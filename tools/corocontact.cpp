@@ -1,5 +1,6 @@
 // The corocontact command: run a case, detect contacts, describe a mesh or a surface.
-// Exit codes: 0 success, 2 bad input, 3 the simulation diverged.
+// Exit codes: 0 success, 2 bad input, 3 the simulation diverged. Under mpirun (CORO_WITH_MPI) a
+// run is distributed over the processes; they all exit with the same code, rank 0 alone prints.
 
 #include "progress.hpp"
 
@@ -7,17 +8,23 @@
 #include <corocontact/core/error.hpp>
 #include <corocontact/core/surface_mesh.hpp>
 #include <corocontact/core/surface_topology.hpp>
+#include <corocontact/core/collective.hpp>
 #include <corocontact/io/case_reader.hpp>
 #include <corocontact/io/mesh_readers.hpp>
+#include <corocontact/io/rank_output.hpp>
 #include <corocontact/io/scene_loader.hpp>
 #include <corocontact/io/scene_output.hpp>
 #include <corocontact/io/surface_readers.hpp>
 #include <corocontact/io/vtk_series.hpp>
 #include <corocontact/sim/checkpoint.hpp>
 #include <corocontact/sim/interrupt.hpp>
+#include <corocontact/sim/rank_checkpoint.hpp>
 #include <corocontact/sim/scene_contact.hpp>
 #if CORO_WITH_EMBREE
 #include <corocontact/embree/embree_detector.hpp>
+#endif
+#if CORO_WITH_MPI
+#include <corocontact/mpi/mpi_session.hpp>
 #endif
 #include <corocontact/partition/part_layout.hpp>
 #include <corocontact/partition/partition.hpp>
@@ -100,6 +107,13 @@ std::string frame_file(const std::string& name, coro::Index step)
     return name + "_" + std::string(digits.size() < 6 ? 6 - digits.size() : 0, '0') + digits + ".vtm";
 }
 
+/// A stream that writes nothing: what processes other than rank 0 print to.
+std::ostream& null_stream()
+{
+    static std::ostream null(nullptr);
+    return null;
+}
+
 const char* signal_name(int signal_number)
 {
     return signal_number == SIGINT ? "SIGINT" : signal_number == SIGTERM ? "SIGTERM" : "a signal";
@@ -111,32 +125,46 @@ std::string count_of(std::size_t n, const char* one, const char* many)
     return std::to_string(n) + " " + (n == 1 ? one : many);
 }
 
-int run_case(const RunOptions& options)
+/// Runs a case; `ranks` is null in one process, else the processes of a distributed run
+/// (docs/scale_out.md): each holds its bodies, rank 0 alone prints, and every step, frame and
+/// checkpoint is collective, a failure anywhere throwing on every process.
+int run_case(const RunOptions& options, coro::Communicator* ranks)
 {
     const auto setup_start = std::chrono::steady_clock::now();
-    coro::cli::Progress progress(!options.quiet, isatty(STDERR_FILENO) != 0);
-    coro::CaseSpec spec = coro::read_case(options.case_file);
-    if (!options.out.empty())
-        spec.simulation.output_dir = options.out;
-    if (options.steps > 0)
-        spec.simulation.steps = static_cast<coro::Index>(options.steps);
-
+    const bool root = ranks == nullptr || ranks->rank() == 0;
+    coro::cli::Progress progress(!options.quiet && root, isatty(STDERR_FILENO) != 0);
+    std::ostream& messages = root ? std::cerr : null_stream();
+    coro::CaseSpec spec;
+    coro::LoadedScene loaded;
     // Everything is loaded and checked before the output directory is touched.
-    coro::LoadedScene loaded = coro::load_scene(spec, [&](const std::string& stage) { progress.status(stage); });
+    coro::run_collectively(ranks, [&] {
+        spec = coro::read_case(options.case_file);
+        if (!options.out.empty())
+            spec.simulation.output_dir = options.out;
+        if (options.steps > 0)
+            spec.simulation.steps = static_cast<coro::Index>(options.steps);
+        loaded = coro::load_scene(spec, [&](const std::string& stage) { progress.status(stage); });
+    });
     coro::Scene& scene = loaded.scene;
+    const coro::Index case_bodies = static_cast<coro::Index>(scene.bodies.size());
+    const coro::Index case_tets = scene.num_tets(), case_nodes = scene.num_vertices();
+    coro::SceneDistribution distribution;
+    if (ranks)
+        distribution = coro::distribute_scene(scene, *ranks);
     if (spec.contact.enabled)
         progress.status("contact surfaces and their AABB trees");
-    coro::Simulation simulation(scene, spec);
+    coro::Simulation simulation(scene, spec, ranks ? &distribution : nullptr);
     progress.clear();
     for (const std::string& warning : loaded.warnings)
-        std::cerr << "warning: " << warning << "\n";
+        messages << "warning: " << warning << "\n";
 
     const int threads = threads_used();
     if (!options.quiet)
-        std::cerr << "corocontact " << CORO_VERSION << ": " << spec.simulation.name << ", "
-                  << count_of(scene.bodies.size(), "body", "bodies") << ", " << scene.num_tets() << " tets, "
-                  << scene.num_vertices() << " nodes, " << count_of(static_cast<std::size_t>(threads), "thread", "threads")
-                  << "\n";
+        messages << "corocontact " << CORO_VERSION << ": " << spec.simulation.name << ", "
+                 << count_of(static_cast<std::size_t>(case_bodies), "body", "bodies") << ", " << case_tets
+                 << " tets, " << case_nodes << " nodes, "
+                 << count_of(static_cast<std::size_t>(threads), "thread", "threads")
+                 << (ranks ? " on each of " + std::to_string(ranks->size()) + " processes" : std::string()) << "\n";
 
     const coro::Index last_step =
         spec.simulation.analysis == coro::Analysis::STATIC ? spec.simulation.load_steps : spec.simulation.steps;
@@ -147,9 +175,14 @@ int run_case(const RunOptions& options)
     std::vector<coro::FrameRecord> frames; // written so far, the first run's included
     if (!options.restart.empty()) {
         std::vector<std::string> warnings;
-        coro::CheckpointState state = coro::read_checkpoint(options.restart, scene, fingerprint, warnings);
+        coro::CheckpointState state;
+        coro::run_collectively(ranks, [&] {
+            state = ranks ? coro::read_checkpoint(options.restart, scene, distribution.body_ids, case_bodies,
+                                                  fingerprint, warnings)
+                          : coro::read_checkpoint(options.restart, scene, fingerprint, warnings);
+        });
         for (const std::string& warning : warnings)
-            std::cerr << "warning: " << warning << "\n";
+            messages << "warning: " << warning << "\n";
         CORO_CHECK(state.step < last_step, InputError,
                    options.restart << ": the checkpoint is at step " << state.step << ", the case ends at step "
                                    << last_step << " (nothing to continue; give a later --steps)");
@@ -163,21 +196,30 @@ int run_case(const RunOptions& options)
                 ++missing;
         }
         if (missing > 0)
-            std::cerr << "warning: " << missing << " of the " << state.frames.size()
+            messages << "warning: " << missing << " of the " << state.frames.size()
                       << " frames the first run wrote up to step " << state.step << " are not in "
                       << spec.simulation.output_dir.string() << "; the series lists only the others\n";
         if (!options.quiet)
-            std::cerr << "continuing from step " << state.step << " (" << options.restart << ")\n";
+            messages << "continuing from step " << state.step << " (" << options.restart << ")\n";
     }
 
-    coro::VtkSeriesWriter writer(spec.simulation.output_dir, spec.simulation.name);
-    for (const coro::FrameRecord& frame : frames)
-        writer.adopt_frame(frame.step, frame.time);
+    std::unique_ptr<coro::VtkSeriesWriter> writer;
+    coro::run_collectively(ranks, [&] {
+        writer = std::make_unique<coro::VtkSeriesWriter>(spec.simulation.output_dir, spec.simulation.name);
+        for (const coro::FrameRecord& frame : frames)
+            writer->adopt_frame(frame.step, frame.time);
+    });
+    std::unique_ptr<coro::RankFrames> rank_frames;
+    if (ranks)
+        rank_frames = std::make_unique<coro::RankFrames>(*ranks, *writer, scene, distribution.body_ids);
     const auto checkpoint_path = spec.simulation.output_dir / (spec.simulation.name + ".checkpoint");
     if (checkpoints) {
         control.checkpoint_every = static_cast<coro::Index>(options.checkpoint_every);
         control.on_checkpoint = [&](coro::Index step, const coro::RunSummary& so_far) {
-            coro::write_checkpoint(checkpoint_path, scene, {step, so_far, frames}, fingerprint);
+            if (ranks)
+                coro::write_checkpoint(checkpoint_path, scene, distribution, {step, so_far, frames}, fingerprint);
+            else
+                coro::write_checkpoint(checkpoint_path, scene, {step, so_far, frames}, fingerprint);
         };
     }
     coro::install_stop_signal_handlers();
@@ -189,7 +231,10 @@ int run_case(const RunOptions& options)
     const coro::RunSummary summary = simulation.run(
         last_step,
         [&](coro::Index step, double time) {
-            writer.write_frame(step, time, coro::scene_frame(scene));
+            if (rank_frames)
+                rank_frames->write(step, time, scene);
+            else
+                writer->write_frame(step, time, coro::scene_frame(scene));
             frames.push_back({step, time});
         },
         [&](coro::Index done, coro::Index total) { progress.update(done, total); }, control);
@@ -199,11 +244,25 @@ int run_case(const RunOptions& options)
     context.name = spec.simulation.name;
     context.threads = threads;
     context.setup_s = setup_s;
-    context.bodies = static_cast<coro::Index>(scene.bodies.size());
-    context.tets = scene.num_tets();
+    context.bodies = case_bodies;
+    context.tets = case_tets;
     context.peak_rss_mb = peak_rss_mb();
+    const coro::RankStats rank_stats = simulation.rank_stats();
+    context.ranks = rank_stats.ranks;
+    context.cross_rank_contacts_mean = rank_stats.cross_rank_contacts_mean;
+    if (ranks) {
+        context.per_rank = coro::gather_rank_loads(*ranks, scene, rank_stats);
+        double peak = context.peak_rss_mb;
+        ranks->all_reduce(&peak, 1, coro::Reduction::MAX);
+        context.peak_rss_mb = peak;
+    }
     const auto summary_path = spec.simulation.output_dir / (spec.simulation.name + ".summary.json");
-    coro::write_file_atomically(summary_path, coro::summary_json(summary, context));
+    coro::run_collectively(ranks, [&] {
+        if (root)
+            coro::write_file_atomically(summary_path, coro::summary_json(summary, context));
+    });
+    if (!root)
+        return summary.stop_signal != 0 ? EXIT_SIGNAL_BASE + summary.stop_signal : 0;
 
     const auto& p = summary.phases;
     const double total = std::max(p.total(), 1e-300);
@@ -212,6 +271,15 @@ int run_case(const RunOptions& options)
                 count_of(static_cast<std::size_t>(summary.steps), "step", "steps").c_str(), summary.wall_s,
                 summary.steps_per_s,
                 count_of(static_cast<std::size_t>(threads), "thread", "threads").c_str(), setup_s);
+    if (ranks) {
+        std::printf("  %d processes (MPI), bodies/tets per process:", ranks->size());
+        for (const coro::RankLoad& load : context.per_rank)
+            std::printf(" %d/%d", static_cast<int>(load.bodies), static_cast<int>(load.tets));
+        std::printf("; received per step and process:");
+        for (const coro::RankLoad& load : context.per_rank)
+            std::printf(" %.0f", load.mpi_bytes_per_step);
+        std::printf(" B; %.1f contact points per detection across processes\n", context.cross_rank_contacts_mean);
+    }
     std::printf("  phases [s]: rotation %.3f (%.0f%%), assembly %.3f (%.0f%%), solve %.3f (%.0f%%), "
                 "contact %.3f (%.0f%%), output %.3f (%.0f%%)\n",
                 p.rotation, 100 * p.rotation / total, p.assembly, 100 * p.assembly / total, p.solve,
@@ -230,8 +298,9 @@ int run_case(const RunOptions& options)
     if (summary.static_not_converged > 0)
         std::printf("  warning: %d static load steps did not reach static_tolerance\n",
                     static_cast<int>(summary.static_not_converged));
-    std::printf("  peak memory %.1f MB\n  series: %s\n  summary: %s\n", context.peak_rss_mb,
-                writer.pvd_path().string().c_str(), summary_path.string().c_str());
+    std::printf("  peak memory %.1f MB%s\n  series: %s\n  summary: %s\n", context.peak_rss_mb,
+                ranks ? " (the largest process)" : "", writer->pvd_path().string().c_str(),
+                summary_path.string().c_str());
     if (checkpoints)
         std::printf("  checkpoint: %s\n", checkpoint_path.string().c_str());
     std::fflush(stdout);
@@ -414,6 +483,22 @@ int describe_mesh(const std::string& path, int parts)
 
 int main(int argc, char** argv)
 {
+#if CORO_WITH_MPI
+    // Started by mpirun: the processes of a distributed run (docs/scale_out.md); alone: no MPI.
+    std::unique_ptr<coro::MpiSession> session;
+    try {
+        session = std::make_unique<coro::MpiSession>(argc, argv);
+    } catch (const std::exception& error) {
+        std::cerr << "error: " << error.what() << "\n";
+        return EXIT_BAD_INPUT;
+    }
+    coro::Communicator* world = session->communicator();
+#else
+    coro::Communicator* world = nullptr;
+#endif
+    coro::Communicator* ranks = world != nullptr && world->size() > 1 ? world : nullptr;
+    const bool root = ranks == nullptr || ranks->rank() == 0; // the one process that prints
+
     CLI::App app{"corocontact: co-rotational FEM bodies in contact"};
     app.set_version_flag("--version", std::string("corocontact ") + CORO_VERSION);
     app.require_subcommand(1);
@@ -472,7 +557,7 @@ int main(int argc, char** argv)
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& error) {
-        const int code = app.exit(error);
+        const int code = root ? app.exit(error) : app.exit(error, null_stream(), null_stream());
         return code == 0 ? 0 : EXIT_BAD_INPUT;
     }
 
@@ -483,31 +568,43 @@ int main(int argc, char** argv)
     if (threads > 0) {
         thread_limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,
                                                              static_cast<std::size_t>(threads));
-        if (threads_used() < threads)
+        if (threads_used() < threads && root)
             std::cerr << "note: --threads " << threads << ": this machine runs at most " << threads_used()
                       << " threads at once; using " << threads_used() << "\n";
     }
-    try {
-        if (run_command->parsed())
-            return run_case(run);
-        if (detect_command->parsed())
-            return detect_case(detect);
-        if (is_surface_file(mesh_path)) {
-            CORO_CHECK(parts == 0, InputError,
-                       "--parts: " << mesh_path << " is a triangle surface; METIS parts are for tet meshes");
-            return describe_surface(mesh_path);
+    std::ostream& errors = root ? std::cerr : null_stream();
+    const auto dispatch = [&]() -> int {
+        try {
+            if (run_command->parsed())
+                return run_case(run, ranks);
+            if (detect_command->parsed())
+                return detect_case(detect);
+            if (is_surface_file(mesh_path)) {
+                CORO_CHECK(parts == 0, InputError,
+                           "--parts: " << mesh_path << " is a triangle surface; METIS parts are for tet meshes");
+                return describe_surface(mesh_path);
+            }
+            return describe_mesh(mesh_path, parts);
+        } catch (const coro::InputError& error) {
+            errors << "error: " << error.what() << "\n";
+            return EXIT_BAD_INPUT;
+        } catch (const coro::NumericalError& error) {
+            errors << "error: the simulation diverged: " << error.what() << "\n";
+            return EXIT_DIVERGED;
+        } catch (const std::exception& error) {
+            // Not one of ours (e.g. std::bad_alloc from a library reading a corrupt file): still a
+            // message and the bad-input code rather than an abort.
+            errors << "error: " << error.what() << "\n";
+            return EXIT_BAD_INPUT;
         }
-        return describe_mesh(mesh_path, parts);
-    } catch (const coro::InputError& error) {
-        std::cerr << "error: " << error.what() << "\n";
-        return EXIT_BAD_INPUT;
-    } catch (const coro::NumericalError& error) {
-        std::cerr << "error: the simulation diverged: " << error.what() << "\n";
-        return EXIT_DIVERGED;
-    } catch (const std::exception& error) {
-        // Not one of ours (e.g. std::bad_alloc from a library reading a corrupt file): still a
-        // message and the bad-input code rather than an abort.
-        std::cerr << "error: " << error.what() << "\n";
-        return EXIT_BAD_INPUT;
+    };
+    if (ranks != nullptr && !run_command->parsed()) {
+        // detect and info run on rank 0; the others end with its exit code.
+        std::vector<char> code(1, 0);
+        if (root)
+            code[0] = static_cast<char>(dispatch());
+        ranks->broadcast(code, 0);
+        return code[0];
     }
+    return dispatch();
 }

@@ -7,6 +7,7 @@
 #include <corocontact/sim/simulation.hpp>
 
 #include <algorithm>
+#include <cstring>
 #include <utility>
 
 namespace coro {
@@ -78,6 +79,24 @@ std::vector<Index> keep_bodies_of(Scene& scene, const BodyOwnership& ownership, 
         }
     scene.bodies = std::move(kept);
     return ids;
+}
+
+SceneDistribution distribute_scene(Scene& scene, Communicator& communicator)
+{
+    SceneDistribution distribution;
+    distribution.communicator = &communicator;
+    distribution.ownership.num_ranks = communicator.size();
+    std::vector<char> owners;
+    if (communicator.rank() == 0) {
+        const std::vector<Index> owner = assign_bodies(scene.bodies, communicator.size()).owner;
+        owners.resize(owner.size() * sizeof(Index));
+        std::memcpy(owners.data(), owner.data(), owners.size());
+    }
+    communicator.broadcast(owners, 0);
+    distribution.ownership.owner.resize(owners.size() / sizeof(Index));
+    std::memcpy(distribution.ownership.owner.data(), owners.data(), owners.size());
+    distribution.body_ids = keep_bodies_of(scene, distribution.ownership, communicator.rank());
+    return distribution;
 }
 
 } // namespace coro

@@ -47,6 +47,19 @@ public:
     /// @throws InputError if a file cannot be written (names the file)
     void write_frame(Index step, double time, const std::vector<FrameBlock>& blocks);
 
+    /// One process's share of a frame that several write (a distributed run): the blocks it
+    /// holds, each under the file name of its place among `names` (what write_frame() gives
+    /// the same block). The frame is listed by list_frame() once every share is written.
+    /// @param[in] names   every block of the frame, in frame order: the same on every process
+    /// @param[in] blocks  this process's blocks, each named in `names`
+    /// @throws InputError if a file cannot be written (names the file)
+    void write_blocks(Index step, const std::vector<std::string>& names, const std::vector<FrameBlock>& blocks);
+
+    /// Writes the .vtm of a frame whose blocks (`names`, in frame order) are written, and
+    /// appends the frame to the .pvd. write_frame() is write_blocks() of all blocks and this.
+    /// @throws InputError if a file cannot be written (names the file)
+    void list_frame(Index step, double time, const std::vector<std::string>& names);
+
     /// Lists a frame that an earlier run wrote into the same directory (a restart continues
     /// its series) without writing anything: the next .pvd lists it before the new frames.
     /// @param[in] step  step number of the frame on disk

@@ -41,4 +41,9 @@ struct SceneDistribution {
 /// @return the case index of every body kept
 std::vector<Index> keep_bodies_of(Scene& scene, const BodyOwnership& ownership, Index rank);
 
+/// Splits a scene holding every body of the case over the processes and keeps this process's
+/// bodies in it: assign_bodies() on rank 0, its owners sent to all, so every process holds the
+/// same assignment. Collective.
+SceneDistribution distribute_scene(Scene& scene, Communicator& communicator);
+
 } // namespace coro
