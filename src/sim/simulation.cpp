@@ -15,6 +15,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <optional>
 #include <tuple>
 #include <string>
 
@@ -59,16 +60,17 @@ struct Simulation::EmbreeCheck {};
 struct Simulation::Ranks {
     Communicator& communicator;
     RankExchange exchange;
-    RankContact contact;
+    std::optional<RankContact> contact; // with contact enabled
     std::uint64_t step_bytes = 0; // received during the steps of this run
     Index steps = 0;              // steps of this run
     Index cross_rank = 0;         // contacts detected here that touch another process, summed
 
-    Ranks(const SceneDistribution& distribution, const Scene& scene, const SceneMatrix& matrix)
+    Ranks(const SceneDistribution& distribution, const Scene& scene, const SceneMatrix& matrix, bool with_contact)
         : communicator(*distribution.communicator),
-          exchange(communicator, chunk_bodies(distribution, matrix), matrix.num_block_rows()),
-          contact(communicator, distribution.ownership, distribution.body_ids, scene)
+          exchange(communicator, chunk_bodies(distribution, matrix), matrix.num_block_rows())
     {
+        if (with_contact)
+            contact.emplace(communicator, distribution.ownership, distribution.body_ids, scene);
     }
     static std::vector<Index> chunk_bodies(const SceneDistribution& distribution, const SceneMatrix& matrix)
     {
@@ -105,7 +107,7 @@ Simulation::Simulation(Scene& scene, const CaseSpec& spec, const SceneDistributi
     if (spec.contact.enabled)
         m_scene.surfaces = make_scene_surfaces(m_scene);
     if (distributed)
-        m_ranks = std::make_unique<Ranks>(*distribution, m_scene, m_system.matrix());
+        m_ranks = std::make_unique<Ranks>(*distribution, m_scene, m_system.matrix(), spec.contact.enabled);
     if (!spec.contact.enabled)
         return;
     if (spec.contact.cross_check == CrossCheck::EMBREE) {
@@ -131,7 +133,7 @@ void Simulation::detect(RunSummary& summary)
         return;
     ScopedTimer timer(summary.phases.contact);
     if (m_ranks) {
-        const RankContact::Counts counts = m_ranks->contact.detect(
+        const RankContact::Counts counts = m_ranks->contact->detect(
             m_scene, m_spec.contact, m_spec.simulation.dt, m_response, m_system.matrix(), m_ranks->exchange);
         ++summary.detections;
         summary.contacts_mean += static_cast<double>(counts.contacts);
