@@ -68,6 +68,7 @@ std::vector<RankLoad> gather_rank_loads(Communicator& communicator, const Scene&
     mine.bodies = static_cast<Index>(scene.bodies.size());
     mine.tets = scene.num_tets();
     mine.mpi_bytes_per_step = stats.mpi_bytes_per_step;
+    mine.solve_bytes_per_step = stats.solve_bytes_per_step;
     std::vector<char> bytes(sizeof mine);
     std::memcpy(bytes.data(), &mine, sizeof mine);
     std::vector<RankLoad> loads;

@@ -152,7 +152,8 @@ std::string summary_json(const RunSummary& summary, const SummaryContext& contex
         for (std::size_t r = 0; r < context.per_rank.size(); ++r) {
             const RankLoad& load = context.per_rank[r];
             out << "    {\"rank\": " << r << ", \"bodies\": " << load.bodies << ", \"tets\": " << load.tets
-                << ", \"mpi_bytes_per_step\": " << load.mpi_bytes_per_step << "}"
+                << ", \"mpi_bytes_per_step\": " << load.mpi_bytes_per_step
+                << ", \"solve_bytes_per_step\": " << load.solve_bytes_per_step << "}"
                 << (r + 1 < context.per_rank.size() ? "," : "") << "\n";
         }
         out << "  ],\n";

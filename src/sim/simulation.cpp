@@ -61,7 +61,8 @@ struct Simulation::Ranks {
     Communicator& communicator;
     RankExchange exchange;
     std::optional<RankContact> contact; // with contact enabled
-    std::uint64_t step_bytes = 0; // received during the steps of this run
+    std::uint64_t step_bytes = 0;  // received during the steps of this run
+    std::uint64_t solve_bytes = 0; // of those, during the solves
     Index steps = 0;              // steps of this run
     Index cross_rank = 0;         // contacts detected here that touch another process, summed
 
@@ -185,7 +186,10 @@ void Simulation::dynamic_step()
         m_system.assemble(dt, m_spec.simulation.gravity, m_spec.contact.enabled ? m_response.forces() : no_forces);
     });
     ScopedTimer timer(phases.solve);
+    const std::uint64_t bytes = m_ranks ? m_ranks->communicator.bytes_received() : 0;
     add_solve(m_system.solve(pcg_settings(m_spec.solver), m_ranks ? &m_ranks->exchange : nullptr), m_totals);
+    if (m_ranks)
+        m_ranks->solve_bytes += m_ranks->communicator.bytes_received() - bytes;
     collectively([&] { m_system.advance(dt); });
 }
 
@@ -315,8 +319,9 @@ RankStats Simulation::rank_stats() const
     if (!m_ranks)
         return stats;
     stats.ranks = m_ranks->communicator.size();
-    stats.mpi_bytes_per_step =
-        m_ranks->steps > 0 ? static_cast<double>(m_ranks->step_bytes) / static_cast<double>(m_ranks->steps) : 0.0;
+    const double steps = static_cast<double>(std::max<Index>(m_ranks->steps, 1));
+    stats.mpi_bytes_per_step = static_cast<double>(m_ranks->step_bytes) / steps;
+    stats.solve_bytes_per_step = static_cast<double>(m_ranks->solve_bytes) / steps;
     std::int64_t cross_rank = m_ranks->cross_rank;
     m_ranks->communicator.all_reduce(&cross_rank, 1, Reduction::SUM);
     stats.cross_rank_contacts_mean =

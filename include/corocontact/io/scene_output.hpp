@@ -38,6 +38,7 @@ struct RankLoad {
     Index bodies = 0;
     Index tets = 0;
     double mpi_bytes_per_step = 0.0; ///< received from the other processes per step [B]
+    double solve_bytes_per_step = 0.0; ///< of those, in the PCG (halo and dot products) [B]
 };
 
 /// What OUT/NAME.summary.json holds besides the RunSummary.
@@ -57,7 +58,7 @@ struct SummaryContext {
 /// The summary as JSON text (keys of DESIGN.md: steps, wall_s (the time loop only),
 /// steps_per_s, setup_s (before the loop), threads, bodies, tets, ranks, mpi_bytes_per_step
 /// (the mean over the processes, 0 in one process; distributed also cross_rank_contacts_mean
-/// and per_rank: rank, bodies, tets, mpi_bytes_per_step),
+/// and per_rank: rank, bodies, tets, mpi_bytes_per_step, solve_bytes_per_step),
 /// phases{rotation,assembly,solve,contact,output}, cg_iterations_mean, cg_residual_mean,
 /// peak_rss_mb, plus solves, solves_not_converged and static_not_converged).
 std::string summary_json(const RunSummary& summary, const SummaryContext& context);

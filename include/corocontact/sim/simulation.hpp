@@ -28,7 +28,9 @@ struct Scene {
     std::vector<ContactSurface> surfaces; ///< with contact: one per body (body order), then one per
                                           ///< mesh obstacle; else empty
     std::vector<SurfaceMesh> obstacle_meshes; ///< rigid, static closed surfaces (mesh obstacles)
-    std::vector<ContactPoint> contacts;   ///< the last detection, sorted by (body, vertex, other)
+    std::vector<ContactPoint> contacts;   ///< the last detection, sorted by (body, vertex, other);
+                                          ///< distributed: those of this process's bodies' vertices,
+                                          ///< `other` in the case's numbering (see rank_contact.hpp)
     std::vector<PlaneObstacle> planes;    ///< rigid half-space obstacles (plane obstacles)
     std::vector<VecX> contact_forces;     ///< per body #3V: contact forces of the last detection [N]
 
@@ -62,6 +64,7 @@ struct RankStats {
     Index ranks = 1;                       ///< processes of the run
     double mpi_bytes_per_step = 0.0;       ///< payload this process received from the others per
                                            ///< step of this run (solve and contact, not output) [B]
+    double solve_bytes_per_step = 0.0;     ///< of those, in the PCG: halo and dot products [B]
     double cross_rank_contacts_mean = 0.0; ///< contact points per detection whose nodes lie on two
                                            ///< or more processes (all processes)
 };

@@ -46,7 +46,8 @@ public:
 
     /// y = A x, and for every chunk c the partial dot product Σ_{i in c} x_i y_i in
     /// `chunk_dots[c]` (the caller adds them in chunk order).
-    /// @param[in] x            #3N scene DOFs
+    /// @param[in] x            #3N scene DOFs, followed by the ghost rows that coupling columns
+    ///                         ≥ N name in a distributed scene (scene_exchange.hpp)
     /// @param[out] y           #3N (must not alias x)
     /// @param[out] chunk_dots  #chunks, or null when no dot product is wanted
     void multiply(const double* x, double* y, double* chunk_dots) const;
