@@ -623,7 +623,7 @@ void read_solver(const TableReader& root, SolverSettings& s)
     const TableReader t(root.ctx(), *table, "solver");
     t.reject_unknown_keys(SOLVER_SCHEMA);
     s.max_iterations = t.integer("max_iterations", s.max_iterations, 1);
-    s.tolerance = t.number("tolerance", s.tolerance, POSITIVE);
+    s.tolerance = t.number("tolerance", s.tolerance, NON_NEGATIVE);
     s.preconditioner = t.choice<Preconditioner>(
         "preconditioner", s.preconditioner,
         {{"jacobi", Preconditioner::JACOBI}, {"block_jacobi", Preconditioner::BLOCK_JACOBI}});

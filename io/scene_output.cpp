@@ -107,6 +107,8 @@ std::string summary_json(const RunSummary& summary, const SummaryContext& contex
         << "  \"solves\": " << summary.solves << ",\n"
         << "  \"solves_not_converged\": " << summary.solves_not_converged << ",\n"
         << "  \"static_not_converged\": " << summary.static_not_converged << ",\n"
+        << "  \"static_iterations_mean\": " << summary.static_iterations_mean << ",\n"
+        << "  \"static_iterations_max\": " << summary.static_iterations_max << ",\n"
         << "  \"max_contact_depth\": " << summary.max_contact_depth << ",\n"
         << "  \"contacts_mean\": " << summary.contacts_mean << ",\n"
         << "  \"embree_disagreements\": " << summary.embree_disagreements << ",\n"

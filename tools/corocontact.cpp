@@ -13,6 +13,7 @@
 #include <corocontact/io/vtk_series.hpp>
 #include <corocontact/sim/checkpoint.hpp>
 #include <corocontact/sim/interrupt.hpp>
+#include <corocontact/sim/run_notes.hpp>
 #include <corocontact/sim/scene_contact.hpp>
 #if CORO_WITH_EMBREE
 #include <corocontact/embree/embree_detector.hpp>
@@ -82,6 +83,8 @@ int run_case(const RunOptions& options)
     coro::LoadedScene loaded = coro::load_scene(spec);
     for (const std::string& warning : loaded.warnings)
         std::cerr << "warning: " << warning << "\n";
+    if (const auto note = coro::contact_not_applied_note(spec))
+        std::cerr << *note << "\n";
     coro::Scene& scene = loaded.scene;
 
     const auto threads = static_cast<coro::Index>(
@@ -168,16 +171,21 @@ int run_case(const RunOptions& options)
     std::printf("  PCG: %.1f iterations per solve, mean relative residual %.2e, %d of %d solves at the cap\n",
                 summary.cg_iterations_mean, summary.cg_residual_mean, static_cast<int>(summary.solves_not_converged),
                 static_cast<int>(summary.solves));
-    if (spec.contact.enabled) {
+    if (coro::contact_applies(spec)) {
         std::printf("  contact: %.1f vertices inside per step, max depth %.4g m", summary.contacts_mean,
                     summary.max_contact_depth);
         if (spec.contact.cross_check == coro::CrossCheck::EMBREE)
             std::printf(", Embree disagreements %d", static_cast<int>(summary.embree_disagreements));
         std::printf("\n");
     }
+    if (spec.simulation.analysis == coro::Analysis::STATIC)
+        std::printf("  Newton: %.1f iterations per load step, at most %d\n", summary.static_iterations_mean,
+                    static_cast<int>(summary.static_iterations_max));
     if (summary.static_not_converged > 0)
         std::printf("  warning: %d static load steps did not reach static_tolerance\n",
                     static_cast<int>(summary.static_not_converged));
+    if (const auto warning = coro::iteration_cap_warning(summary, spec.solver))
+        std::printf("  %s\n", warning->c_str());
     std::printf("  peak memory %.1f MB\n  series: %s\n  summary: %s\n", context.peak_rss_mb,
                 writer.pvd_path().string().c_str(), summary_path.string().c_str());
     if (checkpoints)

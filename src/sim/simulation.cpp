@@ -5,6 +5,7 @@
 #include <corocontact/sim/contact_step.hpp>
 #include <corocontact/sim/divergence_check.hpp>
 #include <corocontact/sim/integrator.hpp>
+#include <corocontact/sim/run_notes.hpp>
 #include <corocontact/sim/scene_contact.hpp>
 #include <corocontact/sim/static_solver.hpp>
 
@@ -58,7 +59,7 @@ struct Simulation::EmbreeCheck {};
 Simulation::Simulation(Scene& scene, const CaseSpec& spec)
     : m_scene(scene), m_spec(spec), m_divergence(scene.bodies)
 {
-    if (!spec.contact.enabled)
+    if (!contact_applies(spec))
         return;
     m_scene.surfaces = make_scene_surfaces(m_scene);
     if (spec.contact.cross_check == CrossCheck::EMBREE) {
@@ -75,7 +76,7 @@ Simulation::~Simulation() = default;
 
 void Simulation::detect(RunSummary& summary)
 {
-    if (!m_spec.contact.enabled)
+    if (!contact_applies(m_spec))
         return;
     ScopedTimer timer(summary.phases.contact);
     update_contact_surfaces(m_scene.bodies, m_scene.surfaces);
@@ -154,10 +155,13 @@ void Simulation::static_step(Index load_step, RunSummary& summary)
                 throw;
             CORO_THROW(NumericalError, "body '" << body.name() << "': " << what);
         }
-        ++summary.solves;
+        summary.solves += result.solves;
         summary.cg_iterations_mean += result.cg_iterations;
-        summary.cg_residual_mean += result.residual;
+        summary.cg_residual_mean += result.cg_residual_sum;
+        summary.solves_not_converged += result.solves_not_converged;
         summary.static_not_converged += result.converged ? 0 : 1;
+        summary.static_iterations_mean += result.iterations;
+        summary.static_iterations_max = std::max(summary.static_iterations_max, result.iterations);
     }
 }
 
@@ -242,6 +246,8 @@ RunSummary Simulation::run(Index steps, const FrameCallback& on_frame, const Pro
     }
     if (summary.detections > 0)
         summary.contacts_mean /= summary.detections;
+    if (is_static && summary.steps > 0)
+        summary.static_iterations_mean /= static_cast<double>(summary.steps) * static_cast<double>(m_scene.bodies.size());
     return summary;
 }
 

@@ -287,6 +287,13 @@ TEST(ReadCase, IntegersAreAcceptedWhereNumbersAreExpected)
     EXPECT_EQ(spec.bodies[0].material.young, 200.0);
 }
 
+TEST(ReadCase, ToleranceZeroIsAcceptedAndMeansRunTheCap)
+{
+    const coro::CaseSpec spec = parse("[solver]\ntolerance = 0\nmax_iterations = 10\n" + BOX);
+    EXPECT_EQ(spec.solver.tolerance, 0.0);
+    EXPECT_EQ(spec.solver.max_iterations, 10);
+}
+
 TEST(ReadCase, InlineArrayOfTablesEqualsHeaderForm)
 {
     const coro::CaseSpec spec = parse(
@@ -577,7 +584,7 @@ INSTANTIATE_TEST_SUITE_P(
         BadValue{"NameEmpty", sim("name = \"\""), "case.toml:2:8: simulation.name:", "non-empty"},
         BadValue{"OutputDirEmpty", sim("output_dir = \"\""), "case.toml:2:14: simulation.output_dir:", "empty"},
         BadValue{"MaxIterationsZero", solver("max_iterations = 0"), "case.toml:2:18: solver.max_iterations:", "found the integer 0"},
-        BadValue{"ToleranceZero", solver("tolerance = 0"), "case.toml:2:13: solver.tolerance:", "expected a number > 0, found the integer 0"},
+        BadValue{"ToleranceNegative", solver("tolerance = -1e-6"), "case.toml:2:13: solver.tolerance:", "expected a number >= 0, found the floating-point number -1e-06"},
         BadValue{"StaticToleranceNegative", solver("static_tolerance = -1e-8"), "case.toml:2:20: solver.static_tolerance:", "> 0"},
         BadValue{"StaticMaxIterationsZero", solver("static_max_iterations = 0"), "case.toml:2:25: solver.static_max_iterations:", ">= 1"},
         BadValue{"PartsPerThreadZero", solver("parts_per_thread = 0"), "case.toml:2:20: solver.parts_per_thread:", "found the integer 0"},
