@@ -13,13 +13,16 @@
 //             nodal with rigid-body interpolation vectors (MFEM's elasticity options)
 //   petsc     GAMG in PETSc's CG, block size 3: without and with the rigid-body near-null
 //             space (MatNullSpaceCreateRigidBody)
+//   ours + AmgPreconditioner  our PCG iteration (TBB SpMV and vector passes) around the GAMG
+//             component of src/solver
 // and the reuse of the first system's hierarchy on the later ones. The methods run interleaved,
-// R times (medians at the end); --only keeps the methods whose label contains TEXT ("ours",
-// "hypre", "petsc gamg rigid", ...). hypre and PETSc run in one process without threads (the
+// R times (medians at the end); --only keeps the methods whose label contains one of the
+// comma-separated TEXT parts ("ours,hypre systems,petsc gamg rigid-body thr 0.0", ...). hypre and PETSc run in one process without threads (the
 // Debian builds of both have no OpenMP).
 #include <corocontact/io/case_reader.hpp>
 #include <corocontact/io/scene_loader.hpp>
 #include <corocontact/sim/integrator.hpp>
+#include <corocontact/solver/amg_preconditioner.hpp>
 #include <corocontact/solver/pcg.hpp>
 #include <corocontact/solver/vector_ops.hpp>
 
@@ -37,6 +40,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <deque>
 #include <functional>
 #include <string>
 #include <vector>
@@ -410,43 +414,84 @@ private:
 
 // ---------------------------------------------------------------------------------------------
 
-/// The bodies' systems as one block-diagonal system (one body: its own).
+/// The bodies' systems as one block-diagonal system in upper storage, as our PCG takes it
+/// (one body: its own matrix, with its chunks).
 System combine(std::vector<Body>& bodies, const std::vector<Index>& chosen, const std::vector<VecX>& rhs, Index step)
 {
-    std::vector<Index> row_offsets{0}, columns;
-    std::vector<double> values;
     System s;
-    Index node_offset = 0;
-    std::vector<VecX> parts_b, parts_x, parts_p;
-    for (const Index k : chosen) {
-        const BsrMatrix general = bodies[static_cast<std::size_t>(k)].system_matrix().to_general();
-        for (Index r = 0; r < general.num_block_rows(); ++r) {
-            for (Index j = general.row_offsets()[static_cast<std::size_t>(r)];
-                 j < general.row_offsets()[static_cast<std::size_t>(r) + 1]; ++j)
-                columns.push_back(node_offset + general.columns()[static_cast<std::size_t>(j)]);
-            row_offsets.push_back(static_cast<Index>(columns.size()));
+    if (chosen.size() == 1) {
+        s.bsr = bodies[static_cast<std::size_t>(chosen[0])].system_matrix();
+    } else {
+        std::vector<Index> row_offsets{0}, columns;
+        std::vector<double> values;
+        Index node_offset = 0;
+        for (const Index k : chosen) {
+            const BsrMatrix& a = bodies[static_cast<std::size_t>(k)].system_matrix();
+            for (Index r = 0; r < a.num_block_rows(); ++r) {
+                for (Index j = a.row_offsets()[static_cast<std::size_t>(r)]; j < a.row_offsets()[static_cast<std::size_t>(r) + 1]; ++j)
+                    columns.push_back(node_offset + a.columns()[static_cast<std::size_t>(j)]);
+                row_offsets.push_back(static_cast<Index>(columns.size()));
+            }
+            values.insert(values.end(), a.values().begin(), a.values().end());
+            node_offset += a.num_block_rows();
         }
-        values.insert(values.end(), general.values().begin(), general.values().end());
-        node_offset += general.num_block_rows();
-        parts_b.push_back(rhs[static_cast<std::size_t>(k)]);
-        parts_x.push_back(bodies[static_cast<std::size_t>(k)].velocities());
-        parts_p.push_back(bodies[static_cast<std::size_t>(k)].positions());
+        s.bsr = BsrMatrix::symmetric_upper(row_offsets, columns);
+        s.bsr.values() = values;
     }
-    s.bsr = BsrMatrix(row_offsets, columns);
-    s.bsr.values() = values;
     s.a = s.bsr.to_sparse();
-    s.b.resize(3 * node_offset);
-    s.x0.resize(3 * node_offset);
-    s.positions.resize(3 * node_offset);
+    const Eigen::Index n = s.bsr.num_dofs();
+    s.b.resize(n);
+    s.x0.resize(n);
+    s.positions.resize(n);
     Eigen::Index at = 0;
-    for (std::size_t i = 0; i < parts_b.size(); ++i) {
-        s.b.segment(at, parts_b[i].size()) = parts_b[i];
-        s.x0.segment(at, parts_b[i].size()) = parts_x[i];
-        s.positions.segment(at, parts_b[i].size()) = parts_p[i];
-        at += parts_b[i].size();
+    for (const Index k : chosen) {
+        const Body& body = bodies[static_cast<std::size_t>(k)];
+        const Eigen::Index size = body.positions().size();
+        s.b.segment(at, size) = rhs[static_cast<std::size_t>(k)];
+        s.x0.segment(at, size) = body.velocities();
+        s.positions.segment(at, size) = body.positions();
+        at += size;
     }
     s.step = step;
     return s;
+}
+
+/// Our PCG iteration (q = Ap with pᵀq, then x, r and z = M⁻¹r, then p) with the AMG
+/// preconditioner component: what phase 2 puts into PcgSolver.
+Row ours_with_amg(const System& s, AmgPreconditioner& amg, double tolerance, bool reused)
+{
+    Row row;
+    row.method = std::string("ours + AmgPreconditioner") + (reused ? " (reused)" : "");
+    row.step = s.step;
+    if (!reused) {
+        const double before = amg.times().setup_s;
+        amg.setup(s.bsr, s.positions);
+        row.setup_s = amg.times().setup_s - before;
+    }
+    const auto start = Clock::now();
+    const Index n = s.bsr.num_dofs();
+    VecX x = s.x0, r(n), z(n), p(n), q(n);
+    s.bsr.multiply(x, r);
+    r = s.b - r;
+    amg.apply(r, z);
+    p = z;
+    double rz = dot(r, z);
+    const double target = tolerance * norm(s.b);
+    Index it = 0;
+    while (norm(r) > target && it < 10000) {
+        const double alpha = rz / s.bsr.multiply_dot(p, q);
+        axpy(alpha, p, x);
+        axpy(-alpha, q, r);
+        amg.apply(r, z);
+        const double next = dot(r, z);
+        xpby(z, next / rz, p);
+        rz = next;
+        ++it;
+    }
+    row.solve_s = seconds_since(start);
+    row.iterations = it;
+    row.residual = true_residual(s, x);
+    return row;
 }
 
 int run(int argc, char** argv)
@@ -536,12 +581,24 @@ int run(int argc, char** argv)
 
     // Every method on every kept system, interleaved, `repeat` times; then the medians.
     using Method = std::function<std::vector<Row>()>;
-    std::vector<std::pair<std::string, Method>> methods;
+    std::deque<std::pair<std::string, Method>> methods; // (a vector trips GCC 12's -Warray-bounds here)
     methods.emplace_back("ours", [&] {
         std::vector<Row> rows;
         for (const System& s : systems)
             for (const PcgPreconditioner kind : {PcgPreconditioner::JACOBI, PcgPreconditioner::BLOCK_JACOBI})
                 rows.push_back(ours(s, kind, tolerance));
+        return rows;
+    });
+    methods.emplace_back("ours + AmgPreconditioner", [&] {
+        std::vector<Row> rows;
+        for (const System& s : systems) {
+            AmgPreconditioner fresh;
+            rows.push_back(ours_with_amg(s, fresh, tolerance, false));
+        }
+        AmgPreconditioner first;
+        first.setup(systems.front().bsr, systems.front().positions);
+        for (std::size_t i = 1; i < systems.size(); ++i)
+            rows.push_back(ours_with_amg(systems[i], first, tolerance, true));
         return rows;
     });
     const std::vector<HypreVariant> hypre_variants{
@@ -583,11 +640,24 @@ int run(int argc, char** argv)
                                      return rows;
                                  });
         }
+    // --only: comma-separated parts of labels; a label is run if it contains one of them.
+    const auto selected = [&](const std::string& label) {
+        if (only.empty())
+            return true;
+        std::size_t from = 0;
+        while (from <= only.size()) {
+            const std::size_t comma = std::min(only.find(',', from), only.size());
+            if (label.find(only.substr(from, comma - from)) != std::string::npos)
+                return true;
+            from = comma + 1;
+        }
+        return false;
+    };
     std::vector<std::string> keys;
     std::vector<std::vector<Row>> samples_of; // per key
     for (Index r = 0; r < repeat; ++r)
         for (const auto& [label, method] : methods) {
-            if (!only.empty() && label.find(only) == std::string::npos)
+            if (!selected(label))
                 continue;
             for (const Row& row : method()) {
                 print(row);
