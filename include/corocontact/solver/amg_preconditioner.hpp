@@ -4,13 +4,13 @@
 /// with the rigid-body modes as near-null space (MatNullSpaceCreateRigidBody), and the rule
 /// for reusing its hierarchy over steps.
 ///
-/// Why GAMG (tools/bench_amg.cpp, docs/solver.md): on the SOFA beam's implicit Euler system
-/// (58k unknowns) solved to 1e-6 it needs 14–16 CG iterations and 0.53–0.58 s (median of 3,
-/// one thread), 0.69 s with a 20-step-old hierarchy, against 0.78–0.91 s for hypre BoomerAMG's
-/// best variant here (systems, aggressive coarsening; 14 iterations) and 1.5–1.8 s for our
-/// Jacobi-PCG (410–424 iterations, two threads). Its setup is dearer (1.1–1.3 s against 0.4 s)
-/// but is reused over steps. The rigid-body near-null space comes from node coordinates, which
-/// serves any number of bodies at once: aggregates never span bodies that do not couple.
+/// Why GAMG (tools/bench_amg.cpp, numbers in docs/solver.md): on the SOFA beam's implicit Euler
+/// system (58k unknowns) solved to 1e-6 it needs 14–16 CG iterations, about 0.6 of the time of
+/// our Jacobi-PCG (410–424 iterations) and 0.7–0.9 of hypre BoomerAMG's best variant here
+/// (systems with aggressive coarsening, 14 iterations); its setup costs three times hypre's
+/// but is reused over steps (a 20-step-old hierarchy needs 18 iterations). The rigid-body
+/// near-null space comes from node coordinates, which serves any number of bodies at once:
+/// aggregates never span bodies that do not couple.
 ///
 /// Determinism: the hierarchy and the V-cycle run in this process on one thread (the PETSc
 /// build has no threads), so z = M⁻¹r does not depend on the TBB thread count, and two setups
