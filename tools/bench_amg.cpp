@@ -19,9 +19,10 @@
 // R times (medians at the end); --only keeps the methods whose label contains one of the
 // comma-separated TEXT parts ("ours,hypre systems,petsc gamg rigid-body thr 0.0", ...). hypre and PETSc run in one process without threads (the
 // Debian builds of both have no OpenMP).
+#include "implicit_euler_system.hpp"
+
 #include <corocontact/io/case_reader.hpp>
 #include <corocontact/io/scene_loader.hpp>
-#include <corocontact/sim/integrator.hpp>
 #include <corocontact/solver/amg_preconditioner.hpp>
 #include <corocontact/solver/pcg.hpp>
 #include <corocontact/solver/vector_ops.hpp>
@@ -479,7 +480,8 @@ Row ours_with_amg(const System& s, AmgPreconditioner& amg, double tolerance, boo
     const double target = tolerance * norm(s.b);
     Index it = 0;
     while (norm(r) > target && it < 10000) {
-        const double alpha = rz / s.bsr.multiply_dot(p, q);
+        s.bsr.multiply(p, q);
+        const double alpha = rz / dot(p, q);
         axpy(alpha, p, x);
         axpy(-alpha, q, r);
         amg.apply(r, z);
@@ -558,11 +560,9 @@ int run(int argc, char** argv)
     settings.preconditioner = PcgPreconditioner::JACOBI;
     for (Index step = 1; step <= steps; ++step) {
         std::vector<VecX> rhs(bodies.size());
-        PhaseTimes times;
         for (const Index k : chosen)
-            rhs[static_cast<std::size_t>(k)] = assemble_implicit_euler(bodies[static_cast<std::size_t>(k)],
-                                                                        spec.simulation.dt, spec.simulation.gravity,
-                                                                        VecX(), times);
+            rhs[static_cast<std::size_t>(k)] =
+                bench::implicit_euler_system(bodies[static_cast<std::size_t>(k)], spec.simulation.dt, spec.simulation.gravity);
         const bool keep = samples <= 1 ? step == 1 : (step - 1) % std::max<Index>(1, (steps - 1) / (samples - 1)) == 0;
         if (keep && static_cast<Index>(systems.size()) < samples)
             systems.push_back(combine(bodies, chosen, rhs, step));

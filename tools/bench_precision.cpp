@@ -1,27 +1,28 @@
 // bench_precision: what single-precision matrix values would give the solve, measured before
 // BsrMatrix gets them. The SOFA beam's implicit Euler matrix (16×16×76 nodes, 101,250 tets,
 // cases/bench/sofa_beam_16x16x76.toml at its first step) is multiplied and solved by
-//   double  BsrMatrix::multiply_dot and PcgSolver (Jacobi, tolerance 0: the 10-iteration cap)
+//   double  SceneMatrix::multiply with the chunks' pᵀq, and PcgSolver (Jacobi, tolerance 0:
+//           the 10-iteration cap), on the beam as a one-body scene
 //   float   the same upper-storage product with float values (vectors, products and sums in
-//           double; the same chunks, gathers and fixed reduction tree), and the same PCG
+//           double; the same chunks, tasks, gathers and chunk-ordered sums), and the same PCG
 //           (three fused passes per iteration) around it
 // in one run. `--accuracy` instead solves with both to 1e-12 and prints the true residual
 // ‖b − A_double x‖/‖b‖ of each: the float values' accuracy floor.
 //
 //   bench_precision [--threads N] [--accuracy] [benchmark options]     (N defaults to 2)
+#include "implicit_euler_system.hpp"
+
 #include <corocontact/core/primitives.hpp>
 #include <corocontact/partition/partition.hpp>
 #include <corocontact/sim/body.hpp>
-#include <corocontact/sim/integrator.hpp>
 #include <corocontact/solver/pcg.hpp>
+#include <corocontact/solver/row_chunks.hpp>
+#include <corocontact/solver/scene_matrix.hpp>
 #include <corocontact/solver/vector_ops.hpp>
 
 #include <benchmark/benchmark.h>
 
-#include <tbb/blocked_range.h>
 #include <tbb/global_control.h>
-#include <tbb/parallel_for.h>
-#include <tbb/parallel_reduce.h>
 
 #if defined(__AVX2__) && defined(__FMA__)
 #include <immintrin.h>
@@ -41,8 +42,6 @@ namespace {
 
 using namespace coro;
 
-constexpr Index SPMV_GRAIN = 256;   // as BsrMatrix
-constexpr Index UPDATE_GRAIN = 1024; // as PcgSolver
 
 /// The beam's system at its first implicit Euler step.
 struct Beam {
@@ -66,27 +65,29 @@ const Beam& beam()
         const TetMesh mesh = make_box(Vec3(0.0, 6.0, -2.0), Vec3(19.0, 10.0, 2.0), {75, 15, 15});
         Beam out;
         out.body = std::make_unique<Body>(mesh, spec, default_num_parts(mesh.num_tets(), 4));
-        PhaseTimes times;
-        out.rhs = assemble_implicit_euler(*out.body, 0.04, Vec3(0.0, -9.0, 0.0), VecX(), times);
+        out.rhs = bench::implicit_euler_system(*out.body, 0.04, Vec3(0.0, -9.0, 0.0));
         return out;
     }();
     return b;
 }
 
-/// The upper-storage matrix with float values, multiplied like BsrMatrix::multiply_dot.
+/// The upper-storage matrix with float values, multiplied as SceneMatrix::multiply multiplies
+/// a one-body scene: the body's product chunks as tasks, each chunk's rows with the mirrors of
+/// blocks inside it, then the mirrors reaching across chunks gathered per row with the chunk's
+/// partial dot product.
 class FloatUpper {
 public:
-    explicit FloatUpper(const BsrMatrix& a) : m_a(a)
+    explicit FloatUpper(const BsrMatrix& a) : m_a(a), m_scene({&a})
     {
         m_values.assign(a.values().begin(), a.values().end());
-        // Chunks and gathers built as BsrMatrix builds them (it does not expose its own): any
-        // chunks give the right product; these are CorotationalFem's, for the same work split.
-        m_chunks = chunks_of(a);
+        // Per row, the blocks (k, source row) of earlier chunks whose column is the row (the
+        // BsrMatrix keeps its own list private).
+        const std::vector<Index>& chunks = a.chunk_offsets();
         const Index n = a.num_block_rows();
         std::vector<Index> chunk_end(static_cast<std::size_t>(n));
-        for (std::size_t c = 0; c + 1 < m_chunks.size(); ++c)
-            for (Index r = m_chunks[c]; r < m_chunks[c + 1]; ++r)
-                chunk_end[static_cast<std::size_t>(r)] = m_chunks[c + 1];
+        for (std::size_t c = 0; c + 1 < chunks.size(); ++c)
+            for (Index r = chunks[c]; r < chunks[c + 1]; ++r)
+                chunk_end[static_cast<std::size_t>(r)] = chunks[c + 1];
         m_gather_offsets.assign(static_cast<std::size_t>(n) + 1, 0);
         for (Index r = 0; r < n; ++r)
             for (Index k = a.row_offsets()[static_cast<std::size_t>(r)]; k < a.row_offsets()[static_cast<std::size_t>(r) + 1]; ++k)
@@ -102,51 +103,33 @@ public:
                 if (c >= chunk_end[static_cast<std::size_t>(r)])
                     m_gather[static_cast<std::size_t>(fill[static_cast<std::size_t>(c)]++)] = {k, r};
             }
+        m_chunk_dots.resize(static_cast<std::size_t>(m_scene.chunks().num_chunks()));
     }
 
-    double multiply_dot(const double* x, double* y) const
+    const RowChunks& chunks() const { return m_scene.chunks(); }
+
+    /// y = A x with float values; returns x·y summed per chunk, then in chunk order.
+    double multiply_dot(const double* x, double* y)
     {
-        const auto n_chunks = static_cast<Index>(m_chunks.size()) - 1;
-        tbb::parallel_for(tbb::blocked_range<Index>(0, n_chunks, 1), [&](const tbb::blocked_range<Index>& range) {
-            for (Index chunk = range.begin(); chunk != range.end(); ++chunk) {
-                const Index begin = m_chunks[static_cast<std::size_t>(chunk)],
-                            end = m_chunks[static_cast<std::size_t>(chunk) + 1];
-                std::fill(y + 3 * static_cast<std::ptrdiff_t>(begin), y + 3 * static_cast<std::ptrdiff_t>(end), 0.0);
-                chunk_rows(x, y, begin, end);
-            }
+        for_each_chunk(m_scene.chunks(), [&](Index, Index begin, Index end) {
+            std::fill(y + 3 * static_cast<std::ptrdiff_t>(begin), y + 3 * static_cast<std::ptrdiff_t>(end), 0.0);
+            chunk_rows(x, y, begin, end);
         });
-        return tbb::parallel_deterministic_reduce(
-            tbb::blocked_range<Index>(0, m_a.num_block_rows(), SPMV_GRAIN), 0.0,
-            [&](const tbb::blocked_range<Index>& range, double acc) {
-                for (Index r = range.begin(); r != range.end(); ++r)
-                    gather_row(x, y, r);
-                double sum = 0.0;
-                for (std::ptrdiff_t i = 3 * static_cast<std::ptrdiff_t>(range.begin());
-                     i < 3 * static_cast<std::ptrdiff_t>(range.end()); ++i)
-                    sum += x[i] * y[i];
-                return acc + sum;
-            },
-            std::plus<double>());
+        for_each_chunk(m_scene.chunks(), [&](Index c, Index begin, Index end) {
+            for (Index r = begin; r < end; ++r)
+                gather_row(x, y, r);
+            double sum = 0.0;
+            for (std::ptrdiff_t i = 3 * static_cast<std::ptrdiff_t>(begin); i < 3 * static_cast<std::ptrdiff_t>(end); ++i)
+                sum += x[i] * y[i];
+            m_chunk_dots[static_cast<std::size_t>(c)] = sum;
+        });
+        double sum = 0.0;
+        for (const double d : m_chunk_dots)
+            sum += d;
+        return sum;
     }
 
 private:
-    // The chunks CorotationalFem::make_matrix gives the beam's matrix: its parts' interior
-    // rows, then the interface rows in pieces.
-    static std::vector<Index> chunks_of(const BsrMatrix&)
-    {
-        const CorotationalFem& fem = beam().body->fem();
-        std::vector<Index> chunks{0};
-        const PartLayout& layout = fem.layout();
-        const Index parts = layout.num_parts, first_interface = layout.first_interface_node(), n = fem.num_vertices();
-        for (Index p = 0; p < parts; ++p)
-            if (layout.node_offsets[static_cast<std::size_t>(p) + 1] > chunks.back())
-                chunks.push_back(layout.node_offsets[static_cast<std::size_t>(p) + 1]);
-        const Index piece = std::max<Index>(1024, first_interface / std::max<Index>(parts, 1));
-        for (Index r = first_interface; r < n; r = std::min(r + piece, n))
-            chunks.push_back(std::min(r + piece, n));
-        return chunks;
-    }
-
 #if defined(__AVX2__) && defined(__FMA__)
     static __m256d load3(const double* p)
     {
@@ -258,22 +241,25 @@ private:
 #endif
 
     const BsrMatrix& m_a;
+    SceneMatrix m_scene; // the chunks and their tasks, as PcgSolver runs a one-body scene
     std::vector<float> m_values;
-    std::vector<Index> m_chunks;
     std::vector<Index> m_gather_offsets;
     std::vector<std::array<Index, 2>> m_gather;
+    std::vector<double> m_chunk_dots;
 };
 
-/// PcgSolver's iteration (Jacobi) around the float product: q = Ap with pᵀq, then one fused
-/// pass x += αp, r −= αq, z = D⁻¹r with r·r and r·z, then p = z + βp.
+/// PcgSolver's iteration (Jacobi) around the float product: q = Ap with the chunks' pᵀq, then
+/// one fused pass x += αp, r −= αq, z = D⁻¹r with the chunks' r·r and r·z, then p = z + βp;
+/// every sum per chunk, then in chunk order.
 struct FloatPcg {
     struct Sums {
         double rr = 0.0, rz = 0.0;
     };
     VecX r, z, p, q, inverse_diagonal;
+    std::vector<Sums> chunk_sums;
 
     /// @return the relative residual ‖r‖/‖b‖ of the recurrence after `iterations`
-    double solve(const FloatUpper& a, const BsrMatrix& pattern, const VecX& b, VecX& x, Index iterations, double tolerance)
+    double solve(FloatUpper& a, const BsrMatrix& pattern, const VecX& b, VecX& x, Index iterations, double tolerance)
     {
         const Index n = pattern.num_dofs();
         r.resize(n);
@@ -281,20 +267,22 @@ struct FloatPcg {
         p.resize(n);
         q.resize(n);
         inverse_diagonal.resize(n);
+        chunk_sums.resize(static_cast<std::size_t>(a.chunks().num_chunks()));
         for (Index v = 0; v < pattern.num_block_rows(); ++v) // the float values' diagonal
             for (int i = 0; i < 3; ++i)
-                inverse_diagonal[3 * v + i] = 1.0 / static_cast<double>(static_cast<float>(pattern.block(pattern.diagonal(v))(i, i)));
+                inverse_diagonal[3 * v + i] =
+                    1.0 / static_cast<double>(static_cast<float>(pattern.block(pattern.diagonal(v))(i, i)));
         a.multiply_dot(x.data(), r.data());
-        Sums sums = pass(b.data(), 0.0, x.data());
+        Sums sums = pass(a.chunks(), b.data(), 0.0, x.data());
         double rz = sums.rz;
-        const double b_norm = norm(b);
+        const double b_norm = b.norm();
         p = z;
         Index it = 0;
         double r_norm = std::sqrt(sums.rr);
         while (it < iterations && r_norm > tolerance * b_norm) {
             const double pq = a.multiply_dot(p.data(), q.data());
             const double alpha = rz / pq;
-            sums = pass(nullptr, alpha, x.data());
+            sums = pass(a.chunks(), nullptr, alpha, x.data());
             ++it;
             r_norm = std::sqrt(sums.rr);
             xpby(z, sums.rz / rz, p);
@@ -303,45 +291,52 @@ struct FloatPcg {
         return r_norm / b_norm;
     }
 
-    Sums pass(const double* b, double alpha, double* x)
+    Sums pass(const RowChunks& chunks, const double* b, double alpha, double* x)
     {
-        const auto n_nodes = static_cast<Index>(r.size() / 3);
-        return tbb::parallel_deterministic_reduce(
-            tbb::blocked_range<Index>(0, n_nodes, UPDATE_GRAIN), Sums{},
-            [&](const tbb::blocked_range<Index>& range, Sums acc) {
-                const std::ptrdiff_t begin = 3 * static_cast<std::ptrdiff_t>(range.begin());
-                const std::ptrdiff_t end = 3 * static_cast<std::ptrdiff_t>(range.end());
-                double rr = 0.0, rz_ = 0.0;
+        for_each_chunk(chunks, [&](Index c, Index row_begin, Index row_end) {
+            const std::ptrdiff_t begin = 3 * static_cast<std::ptrdiff_t>(row_begin);
+            const std::ptrdiff_t end = 3 * static_cast<std::ptrdiff_t>(row_end);
+            if (b) {
+                for (std::ptrdiff_t i = begin; i < end; ++i)
+                    r[i] = b[i] - r[i];
+            } else {
                 for (std::ptrdiff_t i = begin; i < end; ++i) {
-                    if (b)
-                        r[i] = b[i] - r[i];
-                    else {
-                        x[i] += alpha * p[i];
-                        r[i] -= alpha * q[i];
-                    }
-                    z[i] = inverse_diagonal[i] * r[i];
-                    rr += r[i] * r[i];
-                    rz_ += r[i] * z[i];
+                    x[i] += alpha * p[i];
+                    r[i] -= alpha * q[i];
                 }
-                acc.rr += rr;
-                acc.rz += rz_;
-                return acc;
-            },
-            [](Sums left, const Sums& right) {
-                left.rr += right.rr;
-                left.rz += right.rz;
-                return left;
-            });
+            }
+            for (std::ptrdiff_t i = begin; i < end; ++i)
+                z[i] = inverse_diagonal[i] * r[i];
+            Sums sums;
+            for (std::ptrdiff_t i = begin; i < end; ++i) {
+                sums.rr += r[i] * r[i];
+                sums.rz += r[i] * z[i];
+            }
+            chunk_sums[static_cast<std::size_t>(c)] = sums;
+        });
+        Sums total;
+        for (const Sums& sums : chunk_sums) {
+            total.rr += sums.rr;
+            total.rz += sums.rz;
+        }
+        return total;
     }
 };
 
 void SpmvDouble(benchmark::State& state)
 {
     const BsrMatrix& a = beam().body->system_matrix();
+    const SceneMatrix scene({&a});
     const VecX x = beam().rhs;
     VecX y(x.size());
-    for (auto _ : state)
-        benchmark::DoNotOptimize(a.multiply_dot(x, y));
+    std::vector<double> chunk_dots(static_cast<std::size_t>(scene.chunks().num_chunks()));
+    for (auto _ : state) {
+        scene.multiply(x.data(), y.data(), chunk_dots.data());
+        double sum = 0.0;
+        for (const double d : chunk_dots)
+            sum += d;
+        benchmark::DoNotOptimize(sum);
+    }
     state.counters["blocks"] = a.num_blocks();
     state.SetBytesProcessed(static_cast<int64_t>(state.iterations()) * a.num_blocks() * 9 * 8);
 }
@@ -349,7 +344,7 @@ void SpmvDouble(benchmark::State& state)
 void SpmvFloat(benchmark::State& state)
 {
     const BsrMatrix& a = beam().body->system_matrix();
-    const FloatUpper f(a);
+    FloatUpper f(a);
     const VecX x = beam().rhs;
     VecX y(x.size());
     for (auto _ : state)
@@ -360,6 +355,7 @@ void SpmvFloat(benchmark::State& state)
 void Pcg10Double(benchmark::State& state)
 {
     const BsrMatrix& a = beam().body->system_matrix();
+    const SceneMatrix scene({&a});
     PcgSolver pcg;
     PcgSettings settings;
     settings.max_iterations = 10;
@@ -369,7 +365,7 @@ void Pcg10Double(benchmark::State& state)
     double residual = 0.0;
     for (auto _ : state) {
         x.setZero();
-        residual = pcg.solve(a, beam().rhs, x, settings).residual;
+        residual = pcg.solve(scene, beam().rhs, x, settings).residual;
     }
     state.counters["residual"] = residual;
 }
@@ -377,7 +373,7 @@ void Pcg10Double(benchmark::State& state)
 void Pcg10Float(benchmark::State& state)
 {
     const BsrMatrix& a = beam().body->system_matrix();
-    const FloatUpper f(a);
+    FloatUpper f(a);
     FloatPcg pcg;
     VecX x(a.num_dofs());
     double residual = 0.0;
@@ -397,7 +393,7 @@ void accuracy()
 {
     const BsrMatrix& a = beam().body->system_matrix();
     const VecX& b = beam().rhs;
-    const FloatUpper f(a);
+    FloatUpper f(a);
     VecX ax(b.size()), af(b.size());
     a.multiply(b, ax);
     f.multiply_dot(b.data(), af.data());
