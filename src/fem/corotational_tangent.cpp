@@ -101,7 +101,8 @@ void CorotationalTangent::assemble(CorotationalFem& fem, CRef<VecX> x, const std
     const Tets& tets = fem.tets();
     const std::vector<Mat3>& rotations = fem.rotations();
     const double lambda = fem.lambda(), mu = fem.mu();
-    tbb::parallel_for(tbb::blocked_range<Index>(0, fem.num_tets(), TET_GRAIN), [&](const tbb::blocked_range<Index>& range) {
+    const tbb::blocked_range<Index> all_tets(0, fem.num_tets(), TET_GRAIN);
+    tbb::parallel_for(all_tets, [&](const tbb::blocked_range<Index>& range) {
         for (Index t = range.begin(); t != range.end(); ++t) {
             const Mat34& g = m_gradients[at(t)];
             const Mat3& r = rotations[at(t)];

@@ -111,8 +111,9 @@ struct AmgPreconditioner::Impl {
         // Per block row: (column, block, transposed), the stored blocks and, in upper storage,
         // the mirrors of blocks above.
         std::vector<std::vector<std::array<Index, 3>>> rows(static_cast<std::size_t>(n));
+        const std::vector<Index>& offsets = a.row_offsets();
         for (Index r = 0; r < n; ++r)
-            for (Index k = a.row_offsets()[static_cast<std::size_t>(r)]; k < a.row_offsets()[static_cast<std::size_t>(r) + 1]; ++k) {
+            for (Index k = offsets[static_cast<std::size_t>(r)]; k < offsets[static_cast<std::size_t>(r) + 1]; ++k) {
                 const Index c = a.columns()[static_cast<std::size_t>(k)];
                 rows[static_cast<std::size_t>(r)].push_back({c, k, 0});
                 if (upper && c != r)
@@ -228,7 +229,8 @@ void AmgPreconditioner::apply(CRef<VecX> r, Eigen::Ref<VecX> z)
     Impl& impl = *m_impl;
     if (!ready())
         throw std::logic_error("AmgPreconditioner::apply before setup");
-    if (r.size() != static_cast<Eigen::Index>(impl.values.empty() ? 0 : impl.row_offsets.size() - 1) || z.size() != r.size())
+    const auto dofs = static_cast<Eigen::Index>(impl.row_offsets.size() - 1);
+    if (r.size() != dofs || z.size() != r.size())
         throw std::invalid_argument("AmgPreconditioner::apply: vectors of " + std::to_string(r.size()) + " and " +
                                     std::to_string(z.size()) + " values for " +
                                     std::to_string(impl.row_offsets.size() - 1) + " DOFs");

@@ -184,7 +184,8 @@ TEST(CorotationalTangent, FixedNodesAreProjectedOut)
 TEST(CorotationalTangent, SameBitsForOneAndTwoThreadsOverParts)
 {
     const TetMesh mesh = test::irregular_box(4, 0.3, 16);
-    PartLayout layout = make_part_layout(mesh.tets, mesh.num_vertices(), partition_tets(mesh.tets, mesh.num_vertices(), 4));
+    const TetPartition parts = partition_tets(mesh.tets, mesh.num_vertices(), 4);
+    const PartLayout layout = make_part_layout(mesh.tets, mesh.num_vertices(), parts);
     const TetMesh reordered = reorder_mesh(mesh, layout);
     CorotationalFem fem(reordered, test_material(), layout);
     const VecX x = deformed(reordered, rotation(50, Vec3(1, 1, 1)), Vec3::Zero(), random_strain(0.1, 8), 0.02, 8);
@@ -198,4 +199,22 @@ TEST(CorotationalTangent, SameBitsForOneAndTwoThreadsOverParts)
         values.push_back(k.values());
     }
     EXPECT_EQ(values[0], values[1]);
+}
+
+TEST(CorotationalTangent, InvertedElementGivesAFiniteSymmetricTangent)
+{
+    // Node 3 pushed through the opposite face: det F < 0, R is the sign-fixed rotation and
+    // tr S · I − S may be singular; the tangent stays finite and the projected one semi-definite.
+    const TetMesh mesh = test::unit_tet();
+    CorotationalFem fem(mesh, test_material());
+    VecX x = fem.rest_dofs();
+    x.segment<3>(9) = Vec3(0.2, 0.2, -0.5);
+    for (const TangentDefiniteness kind : {TangentDefiniteness::EXACT, TangentDefiniteness::PROJECTED}) {
+        const Eigen::MatrixXd k = tangent(fem, x, kind);
+        ASSERT_TRUE(k.allFinite());
+        EXPECT_NEAR_REL(k, Eigen::MatrixXd(k.transpose()), 1e-12 * k.norm(), 0.0);
+        if (kind == TangentDefiniteness::PROJECTED) {
+            EXPECT_GT(smallest_eigenvalue(k), -1e-9 * k.norm());
+        }
+    }
 }

@@ -18,10 +18,11 @@
 /// (the sym part is K's): its eigenvalues along the eigenvectors of S are
 /// m_k = (ψ_i + ψ_j)/(σ_i + σ_j), ψ_i = 2μ(σ_i − 1) + λ(tr S − 3), {i, j, k} = {0, 1, 2} —
 /// zero at rest, positive in tension, negative in compression (the geometric, initial-stress
-/// stiffness). PROJECTED clamps negative m_k to zero (McAdams' definiteness fix): the element
-/// matrices are then positive semi-definite and the tangent ⪰ K', so PCG always applies and a
-/// Newton step is a descent direction of Ψ − f_ext·x; EXACT keeps them, for finite-difference
-/// checks and for callers whose solver handles indefinite matrices.
+/// stiffness). EXACT keeps them: Newton with it converges quadratically, and PCG applies as
+/// long as compression does not make the whole matrix indefinite (buckling). PROJECTED clamps
+/// negative m_k to zero (McAdams' definiteness fix): the element matrices are then positive
+/// semi-definite and the tangent ⪰ K', so PCG always applies and a Newton step is a descent
+/// direction of Ψ − f_ext·x, at the price of linear convergence where elements are compressed.
 
 #include <corocontact/fem/corotational_fem.hpp>
 #include <corocontact/solver/bsr_matrix.hpp>
