@@ -262,7 +262,7 @@ void read_elements_v22(LineCursor& cursor, MshBuilder& builder)
                                   << " values");
         for (std::uint64_t t = 0; t < n_tags; ++t)
             tokens.next("element tag");
-        builder.add_tet(at(cursor), tag, read_tet_nodes(tokens, cursor));
+        builder.add_tet(at(cursor), cursor.line(), tag, read_tet_nodes(tokens, cursor));
     }
     expect_marker(cursor, "$EndElements",
                   "the " + std::to_string(count) + " elements declared at line " +
@@ -313,7 +313,7 @@ void read_elements_v41(LineCursor& cursor, MshBuilder& builder)
                 continue;
             Tokens tokens(line, cursor);
             const std::uint64_t tag = tokens.next_count("element tag");
-            builder.add_tet(at(cursor), tag, read_tet_nodes(tokens, cursor));
+            builder.add_tet(at(cursor), cursor.line(), tag, read_tet_nodes(tokens, cursor));
         }
         n_read += in_block;
     }
@@ -400,7 +400,8 @@ TetMesh read_msh(const std::filesystem::path& path)
             skip_section(cursor, line);
         }
     }
-    return builder.finish();
+    const std::string name = path.string();
+    return builder.finish([&](long at_line) { return name + ":" + std::to_string(at_line); });
 }
 
 TetMesh read_tet_mesh(const std::filesystem::path& path)

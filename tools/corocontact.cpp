@@ -1,13 +1,17 @@
 // The corocontact command: run a case, describe a mesh.
-// Exit codes: 0 success, 2 bad input, 3 the simulation diverged.
+// Exit codes: 0 success, 2 bad input, 3 the simulation diverged, 4 the output could not be
+// written (or its folder is in use by another run).
 
 #include "progress.hpp"
 
 #include <corocontact/config.hpp>
+#include <corocontact/core/atomic_file.hpp>
 #include <corocontact/core/error.hpp>
 #include <corocontact/core/surface_mesh.hpp>
 #include <corocontact/io/case_reader.hpp>
 #include <corocontact/io/mesh_readers.hpp>
+#include <corocontact/io/output_lock.hpp>
+#include <corocontact/io/run_files.hpp>
 #include <corocontact/io/scene_loader.hpp>
 #include <corocontact/io/scene_output.hpp>
 #include <corocontact/io/vtk_series.hpp>
@@ -33,12 +37,14 @@
 #include <csignal>
 #include <cstdio>
 #include <iostream>
+#include <limits>
 #include <memory>
 
 namespace {
 
 constexpr int EXIT_BAD_INPUT = 2;
 constexpr int EXIT_DIVERGED = 3;
+constexpr int EXIT_OUTPUT_FAILED = 4;
 constexpr int EXIT_SIGNAL_BASE = 128; // stopped by signal s: exit 128 + s (130 SIGINT, 143 SIGTERM)
 
 double peak_rss_mb()
@@ -65,6 +71,14 @@ std::string frame_file(const std::string& name, coro::Index step)
     return name + "_" + std::string(digits.size() < 6 ? 6 - digits.size() : 0, '0') + digits + ".vtm";
 }
 
+/// A count from the command line as an Index: refused beyond its range instead of wrapping.
+coro::Index option_index(long value, const char* option)
+{
+    constexpr long MAX = std::numeric_limits<coro::Index>::max();
+    CORO_CHECK(value <= MAX, InputError, option << " " << value << ": expected at most " << MAX);
+    return static_cast<coro::Index>(value);
+}
+
 const char* signal_name(int signal_number)
 {
     return signal_number == SIGINT ? "SIGINT" : signal_number == SIGTERM ? "SIGTERM" : "a signal";
@@ -76,12 +90,23 @@ int run_case(const RunOptions& options)
     if (!options.out.empty())
         spec.simulation.output_dir = options.out;
     if (options.steps > 0)
-        spec.simulation.steps = static_cast<coro::Index>(options.steps);
+        spec.simulation.steps = option_index(options.steps, "--steps");
+    const coro::Index checkpoint_every = option_index(options.checkpoint_every, "--checkpoint-every");
+    // One run per output folder, claimed before the (possibly long) load; a run refused for bad
+    // input removes its lock file again, and the folder if it made it.
+    const std::filesystem::path& out_dir = spec.simulation.output_dir;
+    const coro::OutputLock lock(out_dir, "corocontact run " + options.case_file);
+    if (!lock.stale_owner().empty())
+        std::cerr << "warning: " << lock.path().string() << ": taking over the lock of a run that ended without "
+                  << "removing it (" << lock.stale_owner() << ")\n";
 
     // Everything is loaded and checked before the output directory is touched.
     coro::LoadedScene loaded = coro::load_scene(spec);
     for (const std::string& warning : loaded.warnings)
         std::cerr << "warning: " << warning << "\n";
+    if (!spec.contact.enabled && !spec.obstacles.empty())
+        std::cerr << "warning: " << spec.obstacles.front().location << ": the obstacles have no effect, because "
+                  << "contact.enabled is false (set enabled = true in [contact])\n";
     coro::Scene& scene = loaded.scene;
 
     const auto threads = static_cast<coro::Index>(
@@ -94,7 +119,7 @@ int run_case(const RunOptions& options)
     coro::Simulation simulation(scene, spec);
     const coro::Index last_step =
         spec.simulation.analysis == coro::Analysis::STATIC ? spec.simulation.load_steps : spec.simulation.steps;
-    const bool checkpoints = options.checkpoint_every > 0;
+    const bool checkpoints = checkpoint_every > 0;
     const std::uint64_t fingerprint =
         checkpoints || !options.restart.empty() ? coro::case_fingerprint(spec) : 0;
     coro::RunControl control;
@@ -124,12 +149,22 @@ int run_case(const RunOptions& options)
             std::cerr << "continuing from step " << state.step << " (" << options.restart << ")\n";
     }
 
-    coro::VtkSeriesWriter writer(spec.simulation.output_dir, spec.simulation.name);
+    // What an earlier run of this series left goes (a restart keeps its frames up to the
+    // checkpoint), so no old summary or frame stands beside this run's series.
+    const coro::RemovedFiles removed = coro::remove_earlier_run(out_dir, spec.simulation.name,
+                                                                options.restart.empty() ? -1 : control.resume_step,
+                                                                !options.restart.empty());
+    if (removed.files > 0 && !options.quiet)
+        std::cerr << "removed " << removed.files << " files (" << removed.frames << " frames) of an earlier run of "
+                  << spec.simulation.name << " from " << out_dir.string() << "\n";
+    coro::VtkSeriesWriter writer(out_dir, spec.simulation.name);
     for (const coro::FrameRecord& frame : frames)
         writer.adopt_frame(frame.step, frame.time);
-    const auto checkpoint_path = spec.simulation.output_dir / (spec.simulation.name + ".checkpoint");
+    if (!frames.empty())
+        writer.write_pvd();
+    const auto checkpoint_path = coro::checkpoint_path(out_dir, spec.simulation.name);
     if (checkpoints) {
-        control.checkpoint_every = static_cast<coro::Index>(options.checkpoint_every);
+        control.checkpoint_every = checkpoint_every;
         control.on_checkpoint = [&](coro::Index step, const coro::RunSummary& so_far) {
             coro::write_checkpoint(checkpoint_path, scene, {step, so_far, frames}, fingerprint);
         };
@@ -154,7 +189,7 @@ int run_case(const RunOptions& options)
     context.bodies = static_cast<coro::Index>(scene.bodies.size());
     context.tets = scene.num_tets();
     context.peak_rss_mb = peak_rss_mb();
-    const auto summary_path = spec.simulation.output_dir / (spec.simulation.name + ".summary.json");
+    const auto summary_path = coro::summary_path(out_dir, spec.simulation.name);
     coro::write_file_atomically(summary_path, coro::summary_json(summary, context));
 
     const auto& p = summary.phases;
@@ -206,7 +241,7 @@ int detect_case(const DetectOptions& options)
     if (!options.mode.empty())
         spec.contact.mode = options.mode == "paper" ? coro::ContactMode::PAPER : coro::ContactMode::EXACT;
 #if !CORO_WITH_EMBREE
-    CORO_CHECK(options.cross_check.empty(), coro::InputError,
+    CORO_CHECK(options.cross_check.empty(), InputError,
                "--cross-check embree: this build has no Embree (configure with CORO_WITH_EMBREE=ON)");
 #endif
     coro::LoadedScene loaded = coro::load_scene(spec);
@@ -364,6 +399,9 @@ int main(int argc, char** argv)
     } catch (const coro::InputError& error) {
         std::cerr << "error: " << error.what() << "\n";
         return EXIT_BAD_INPUT;
+    } catch (const coro::OutputError& error) {
+        std::cerr << "error: " << error.what() << "\n";
+        return EXIT_OUTPUT_FAILED;
     } catch (const coro::NumericalError& error) {
         std::cerr << "error: the simulation diverged: " << error.what() << "\n";
         return EXIT_DIVERGED;
