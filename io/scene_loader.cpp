@@ -120,6 +120,36 @@ void check_embedding(const Body& body, const std::string& who, std::vector<std::
                            std::to_string(embedding.num_points()) + " vertices lie outside)");
 }
 
+/// A box load is split over the nodes in its box; the share of a fixed node has no effect, so
+/// less force acts than the case says.
+void warn_about_loads_on_fixed_nodes(const Body& body, const BodySpec& spec, std::vector<std::string>& warnings)
+{
+    Vec3 lost = Vec3::Zero(), total = Vec3::Zero();
+    for (const BoxLoad& load : spec.loads)
+        total += load.force;
+    for (Index v = 0; v < body.num_vertices(); ++v)
+        if (body.fixed()[static_cast<std::size_t>(v)] != 0)
+            lost += body.load_forces().segment<3>(3 * v);
+    if (!(lost.stableNorm() > 1e-12 * total.stableNorm()))
+        return;
+    std::ostringstream message;
+    message << spec.location << ": body '" << spec.name << "': " << lost.stableNorm() << " of the "
+            << total.stableNorm() << " N of its [[body.load]] forces fall on fixed nodes and have no effect";
+    warnings.push_back(message.str());
+}
+
+/// Surface vertices obey the bound of mesh nodes (validate_and_orient): beyond it, contact's
+/// boxes, distances and areas overflow double.
+void check_surface_coordinates(const SurfaceMesh& surface, const std::string& what)
+{
+    for (Index v = 0; v < surface.vertices.rows(); ++v) {
+        const double largest = surface.vertices.row(v).cwiseAbs().maxCoeff();
+        CORO_CHECK(largest <= MAX_COORDINATE, InputError,
+                   what << ": vertex " << v << " has a coordinate of magnitude " << largest
+                        << ", expected at most " << MAX_COORDINATE << " (vertices counted from 0 in file order)");
+    }
+}
+
 /// A body whose every node lies behind a plane obstacle starts inside it: the penalty would
 /// throw it out with a force of its whole depth, almost surely a normal pointing the wrong way.
 void reject_bodies_behind(const CaseSpec& spec, const Scene& scene, const ObstacleSpec& plane, const Vec3& normal)
@@ -211,6 +241,8 @@ LoadedScene load_scene(const CaseSpec& spec)
                              body_spec.surface.string(),
                          loaded.warnings);
             body_spec.transform.apply(surface.vertices);
+            check_surface_coordinates(surface, body_spec.location + ": body '" + body_spec.name + "': surface " +
+                                                   body_spec.surface.string());
             body.embed_surface(std::move(surface));
             check_embedding(body,
                             body_spec.location + ": body '" + body_spec.name + "': surface " +
@@ -224,6 +256,7 @@ LoadedScene load_scene(const CaseSpec& spec)
             loaded.warnings.push_back(body_spec.location + ": body '" + body_spec.name + "': " +
                                       std::to_string(unused.size()) +
                                       " nodes belong to no tet; they are held fixed");
+        warn_about_loads_on_fixed_nodes(body, body_spec, loaded.warnings);
         loaded.scene.bodies.push_back(std::move(body));
     }
     for (const ObstacleSpec& obstacle : spec.obstacles) {
@@ -240,6 +273,7 @@ LoadedScene load_scene(const CaseSpec& spec)
         } catch (const InputError& error) {
             throw InputError(obstacle.location + ": obstacle mesh " + obstacle.mesh.string() + ": " + error.what());
         }
+        check_surface_coordinates(surface, obstacle.location + ": obstacle mesh " + obstacle.mesh.string());
         const SurfaceCheck check = check_surface(surface.faces);
         CORO_CHECK(check.closed_and_oriented(), InputError,
                    obstacle.location << ": obstacle mesh " << obstacle.mesh.string()

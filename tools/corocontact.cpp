@@ -89,8 +89,13 @@ int run_case(const RunOptions& options)
     coro::CaseSpec spec = coro::read_case(options.case_file);
     if (!options.out.empty())
         spec.simulation.output_dir = options.out;
-    if (options.steps > 0)
+    if (options.steps > 0) {
+        CORO_CHECK(spec.simulation.analysis == coro::Analysis::DYNAMIC, InputError,
+                   "--steps " << options.steps << ": " << options.case_file
+                              << " is a static analysis, whose steps are simulation.load_steps; --steps sets the "
+                                 "time steps of a dynamic one");
         spec.simulation.steps = option_index(options.steps, "--steps");
+    }
     const coro::Index checkpoint_every = option_index(options.checkpoint_every, "--checkpoint-every");
     // One run per output folder, claimed before the (possibly long) load; a run refused for bad
     // input removes its lock file again, and the folder if it made it.

@@ -208,6 +208,21 @@ TEST(CorocontactCommandLine, CountsBeyondAnIndexAreRefusedNotWrapped)
     EXPECT_FALSE(fs::exists(dir / "o"));
 }
 
+TEST(CorocontactCommandLine, StepsOfAStaticCaseAreNotSilentlyIgnored)
+{
+    const fs::path dir = coro::test::scratch_dir("cli_static_steps");
+    const fs::path case_file = coro::test::write_text(
+        dir / "static.toml", "[simulation]\nanalysis = \"static\"\nload_steps = 2\n[[body]]\nshape = \"box\"\n"
+                             "[[body.fixed]]\nmax = [0.0, 1e9, 1e9]\n");
+    Outcome outcome = run("run " + case_file.string() + " --steps 7 --quiet --out " + (dir / "o").string(), dir);
+    EXPECT_EQ(outcome.exit_code, 2);
+    EXPECT_THAT(outcome.err, HasSubstr("--steps 7: " + case_file.string() +
+                                       " is a static analysis, whose steps are simulation.load_steps"));
+    EXPECT_FALSE(fs::exists(dir / "o"));
+    outcome = run("run " + case_file.string() + " --quiet --out " + (dir / "o").string(), dir);
+    EXPECT_EQ(outcome.exit_code, 0) << outcome.err;
+}
+
 TEST(CorocontactLoad, ASceneBeyondTheMemoryLimitIsRefusedNamingTheKey)
 {
     // 6 million tets need about 3.6 GB at the estimate's 600 bytes per tet (a run measures

@@ -149,6 +149,18 @@ TEST(LoadScene, WarnsAboutAnEmbeddedSurfaceALittleOutsideItsTets)
     EXPECT_THAT(load("inside_surface.toml", BLOCK + "surface = \"inside.obj\"\n").warnings, IsEmpty());
 }
 
+TEST(LoadScene, WarnsWhenALoadFallsOnFixedNodes)
+{
+    // The load box x >= 1 holds the 4 nodes of the box's right face; the fixed box x >= 1, y <= 0
+    // two of them: half of the 8 N is lost.
+    const std::string right_face = "[[body.load]]\nmin = [1.0, -1.0, -1.0]\nmax = [2.0, 2.0, 2.0]\nforce = [0.0, -8.0, 0.0]\n";
+    const LoadedScene loaded =
+        load("lost.toml", BLOCK + "[[body.fixed]]\nmin = [1.0, -1.0, -1.0]\nmax = [2.0, 0.0, 2.0]\n" + right_face);
+    EXPECT_THAT(loaded.warnings,
+                Contains(HasSubstr("body 'block': 4 of the 8 N of its [[body.load]] forces fall on fixed nodes")));
+    EXPECT_THAT(load("kept.toml", BLOCK + "[[body.fixed]]\nmax = [0.0, 2.0, 2.0]\n" + right_face).warnings, IsEmpty());
+}
+
 TEST(LoadScene, RefusesABodyThatStartsBehindAPlane)
 {
     const std::string plane = "[[obstacle]]\ntype = \"plane\"\npoint = [0.0, 3.0, 0.0]\n";

@@ -161,6 +161,8 @@ CUBE_OBJ = ("v {0} {0} {0}\nv {1} {0} {0}\nv {1} {1} {0}\nv {0} {1} {0}\nv {0} {
             "f 3 8 7\nf 4 1 5\nf 4 5 8\n")
 write("surface_cube.obj", CUBE_OBJ.format(0.1, 0.9))
 write("surface_far.obj", CUBE_OBJ.format(10.1, 10.9))
+write("surface_huge.obj", CUBE_OBJ.format(2.0, 1e300))
+write("case_obstacle_huge.toml", SIM + BODY + "\n[[obstacle]]\ntype = \"mesh\"\nmesh = \"surface_huge.obj\"\n")
 
 # A directory where a mesh or case file is expected (git keeps them through a README).
 for folder in ("folder.msh", "folder.toml"):
