@@ -859,8 +859,8 @@ ObstacleSpec read_obstacle(const TableReader& t)
     return obstacle;
 }
 
-/// A body named like another output block of a frame (an embedded surface's, a mesh
-/// obstacle's) would make two blocks of one name: the frame could not be written.
+/// A body named like another output block of a frame (an embedded surface's, an obstacle's)
+/// would make two blocks of one name: the frame could not be written.
 void reject_block_name_clashes(const Context& ctx, const std::vector<TableReader>& bodies, const CaseSpec& spec)
 {
     std::map<std::string, std::string> taken; // block name -> what writes it
@@ -869,13 +869,15 @@ void reject_block_name_clashes(const Context& ctx, const std::vector<TableReader
             taken[surface_block_name(spec.bodies[k].name)] =
                 "the embedded surface of body '" + spec.bodies[k].name + "' (" +
                 ctx.where(bodies[k].key_region("surface")) + ")";
-    Index mesh_obstacles = 0;
-    for (const ObstacleSpec& obstacle : spec.obstacles)
-        if (obstacle.type == ObstacleType::MESH) {
-            taken[obstacle_block_name(mesh_obstacles)] =
-                "mesh obstacle " + std::to_string(mesh_obstacles) + " ([[obstacle]] at " + obstacle.location + ")";
-            ++mesh_obstacles;
-        }
+    Index meshes = 0, planes = 0;
+    for (const ObstacleSpec& obstacle : spec.obstacles) {
+        const bool mesh = obstacle.type == ObstacleType::MESH;
+        Index& k = mesh ? meshes : planes;
+        taken[mesh ? obstacle_block_name(k) : plane_block_name(k)] = (mesh ? "mesh obstacle " : "plane obstacle ") +
+                                                                     std::to_string(k) + " ([[obstacle]] at " +
+                                                                     obstacle.location + ")";
+        ++k;
+    }
     for (std::size_t k = 0; k < spec.bodies.size(); ++k) {
         const auto it = taken.find(spec.bodies[k].name);
         if (it == taken.end())

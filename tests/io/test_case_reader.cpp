@@ -679,9 +679,11 @@ TEST(ReadCase, ABodyMayNotTakeTheNameOfAnotherOutputBlock)
                     AllOf(StartsWith("case.toml:2:8: body[0].name: expected a name that no other block of the output "
                                      "has, found \"obstacle0\""),
                           HasSubstr("the block name of mesh obstacle 0 ([[obstacle]] at case.toml:4)"))));
-    // obstacle1 is free with one mesh obstacle; a plane is no mesh obstacle.
+    // obstacle1 is free with one mesh obstacle; a plane is no mesh obstacle, but has its block.
     EXPECT_EQ(parse("[[body]]\nname = \"obstacle1\"\nshape = \"box\"\n[[obstacle]]\n" + obstacle).bodies[0].name,
               "obstacle1");
+    EXPECT_THAT([&] { parse("[[body]]\nname = \"plane0\"\nshape = \"box\"\n[[obstacle]]\n" + obstacle); },
+                ThrowsMessage<coro::InputError>(HasSubstr("the block name of plane obstacle 0 ([[obstacle]] at case.toml:4)")));
     EXPECT_THAT([] { parse("[[body]]\nname = \"b_surface\"\nshape = \"box\"\n"
                            "[[body]]\nname = \"b\"\nshape = \"box\"\nsurface = \"fine.obj\"\n"); },
                 ThrowsMessage<coro::InputError>(

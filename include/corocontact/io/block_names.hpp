@@ -16,4 +16,7 @@ inline std::string surface_block_name(const std::string& body_name) { return bod
 /// The block of the k-th mesh obstacle (0-based, counting mesh obstacles only): "obstacle<k>".
 inline std::string obstacle_block_name(Index k) { return "obstacle" + std::to_string(k); }
 
+/// The block of the k-th plane obstacle (0-based, counting planes only): "plane<k>".
+inline std::string plane_block_name(Index k) { return "plane" + std::to_string(k); }
+
 } // namespace coro
