@@ -88,6 +88,32 @@ std::pair<double, double> distance_to_tet(const Vec3& p, const std::array<Index,
 /// little outside them where the tets' faces cut the curved surface's chords).
 constexpr double EMBEDDED_GAP_WARNING = 0.25;
 
+/// The cheap part of check_embedding, before the embedding (which searches every tet for a
+/// vertex outside them all): a vertex farther outside the tets' bounding box than their longest
+/// edge is farther than that from every tet.
+void reject_surface_far_outside(const TetMesh& mesh, const SurfaceMesh& surface, const std::string& who)
+{
+    const Eigen::RowVector3d lo = mesh.rest_positions.colwise().minCoeff();
+    const Eigen::RowVector3d hi = mesh.rest_positions.colwise().maxCoeff();
+    double longest = 0.0;
+    for (Index t = 0; t < mesh.num_tets(); ++t)
+        for (const std::array<int, 3>& face : TET_FACES)
+            longest = std::max(longest, (mesh.rest_positions.row(mesh.tets(t, face[0])) -
+                                         mesh.rest_positions.row(mesh.tets(t, face[1])))
+                                            .norm());
+    for (Index v = 0; v < surface.vertices.rows(); ++v) {
+        const Eigen::RowVector3d p = surface.vertices.row(v);
+        const double outside = (p.cwiseMax(lo).cwiseMin(hi) - p).norm();
+        CORO_CHECK(outside <= longest, InputError,
+                   who << ": vertex " << v << " (counted from 0 in file order) lies " << outside
+                       << " outside the bounding box of the body's tets, farther than their longest edge ("
+                       << longest
+                       << "); expected the surface on or inside the body (it moves with the tets by barycentric "
+                          "weights, which extrapolate outside them): check the surface's units and the body's "
+                          "transform, which applies to the surface too");
+    }
+}
+
 void check_embedding(const Body& body, const std::string& who, std::vector<std::string>& warnings)
 {
     const Embedding& embedding = body.embedding();
@@ -236,18 +262,14 @@ LoadedScene load_scene(const CaseSpec& spec)
                 throw InputError(body_spec.location + ": body '" + body_spec.name + "': surface " +
                                  body_spec.surface.string() + ": " + error.what());
             }
-            warn_if_open(surface.faces,
-                         body_spec.location + ": body '" + body_spec.name + "': surface " +
-                             body_spec.surface.string(),
-                         loaded.warnings);
+            const std::string who =
+                body_spec.location + ": body '" + body_spec.name + "': surface " + body_spec.surface.string();
+            warn_if_open(surface.faces, who, loaded.warnings);
             body_spec.transform.apply(surface.vertices);
-            check_surface_coordinates(surface, body_spec.location + ": body '" + body_spec.name + "': surface " +
-                                                   body_spec.surface.string());
+            check_surface_coordinates(surface, who);
+            reject_surface_far_outside(body.mesh(), surface, who);
             body.embed_surface(std::move(surface));
-            check_embedding(body,
-                            body_spec.location + ": body '" + body_spec.name + "': surface " +
-                                body_spec.surface.string(),
-                            loaded.warnings);
+            check_embedding(body, who, loaded.warnings);
         }
         const std::vector<Index> unused = unreferenced_vertices(body.mesh());
         for (const Index v : unused)

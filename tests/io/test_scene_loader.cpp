@@ -4,6 +4,7 @@
 #include <corocontact/io/scene_loader.hpp>
 
 #include <corocontact/core/error.hpp>
+#include <corocontact/core/primitives.hpp>
 #include <corocontact/io/case_reader.hpp>
 #include <corocontact/io/mesh_readers.hpp>
 
@@ -131,8 +132,24 @@ TEST(LoadScene, RefusesAnEmbeddedSurfaceFarOutsideItsTets)
 {
     test::write_text(scratch() / "far.obj", "v 5 5 5\nv 6 5 5\nv 5 6 5\nv 5 5 6\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n");
     EXPECT_THAT([] { load("far_surface.toml", BLOCK + "surface = \"far.obj\"\n"); },
-                ThrowsMessage<InputError>(AllOf(HasSubstr("body 'block': surface"), HasSubstr("far.obj: vertex "),
-                                                HasSubstr("outside the body's tets"))));
+                ThrowsMessage<InputError>(AllOf(HasSubstr("body 'block': surface"),
+                                                HasSubstr("far.obj: vertex 0 (counted from 0 in file order) lies 6.9282 "
+                                                          "outside the bounding box of the body's tets"))));
+    // Inside the bounding box of a body of two boxes 10 apart, but 4 away from either.
+    TetMesh two = make_box(Vec3::Zero(), Vec3::Ones(), {1, 1, 1});
+    const TetMesh right = make_box(Vec3(10, 0, 0), Vec3(11, 1, 1), {1, 1, 1});
+    const Index n = two.num_vertices();
+    two.rest_positions.conservativeResize(2 * n, 3);
+    two.rest_positions.bottomRows(n) = right.rest_positions;
+    two.tets.conservativeResize(2 * two.num_tets(), 4);
+    two.tets.bottomRows(right.num_tets()) = right.tets.array() + n;
+    write_msh22(scratch() / "two_boxes.msh", two);
+    test::write_text(scratch() / "gap.obj", "v 0.2 0.2 0.2\nv 0.8 0.2 0.2\nv 0.2 0.8 0.2\nv 5 0.5 0.5\n"
+                                            "f 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n");
+    EXPECT_THAT([] { load("gap.toml", "[[body]]\nname = \"two\"\nmesh = \"two_boxes.msh\"\nsurface = \"gap.obj\"\n"); },
+                ThrowsMessage<InputError>(AllOf(HasSubstr("gap.obj: vertex 3 (counted from 0 in file order) lies 4 "
+                                                          "outside the body's tets, 231% of the longest edge"),
+                                                HasSubstr("expected the surface on or inside the body"))));
 }
 
 TEST(LoadScene, WarnsAboutAnEmbeddedSurfaceALittleOutsideItsTets)
