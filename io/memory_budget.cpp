@@ -1,5 +1,7 @@
 #include "detail/memory_budget.hpp"
 
+#include <corocontact/core/error.hpp>
+
 #include <sys/resource.h>
 #include <unistd.h>
 
@@ -78,6 +80,31 @@ std::string memory_text(double bytes)
     else
         std::snprintf(text, sizeof text, "%.0f MB", bytes / 1e6);
     return text;
+}
+
+std::pair<double, std::string> generated_tets(const BodySpec& spec)
+{
+    if (spec.shape == BodyShape::BOX) {
+        const auto& c = spec.cells;
+        return {6.0 * c[0] * c[1] * c[2], "cells = [" + std::to_string(c[0]) + ", " + std::to_string(c[1]) + ", " +
+                                             std::to_string(c[2]) + "]"};
+    }
+    if (spec.shape == BodyShape::SPHERE) {
+        const double r = spec.resolution;
+        return {6.0 * r * r * r, "resolution = " + std::to_string(spec.resolution)};
+    }
+    return {0.0, ""};
+}
+
+void check_memory(double total_tets, const std::string& cause)
+{
+    const MemoryLimit limit = memory_limit();
+    const double need = total_tets * BYTES_PER_TET;
+    CORO_CHECK(need <= limit.bytes, InputError,
+               cause << ": the scene would have " << static_cast<long long>(total_tets) << " tets, which need about "
+                     << memory_text(need) << " of memory (" << BYTES_PER_TET
+                     << " bytes per tet), more than the " << memory_text(limit.bytes) << " of "
+                     << limit.source);
 }
 
 } // namespace coro::detail

@@ -2,7 +2,10 @@
 // Private to io/: how much memory a scene will need, estimated from its tet count before the
 // allocations that count drives, and how much this process may have.
 
+#include <corocontact/sim/case_spec.hpp>
+
 #include <string>
+#include <utility>
 
 namespace coro::detail {
 
@@ -23,5 +26,14 @@ MemoryLimit memory_limit();
 
 /// "23.4 GB", "640 MB" for a byte count.
 std::string memory_text(double bytes);
+
+/// Tets a generated body will have (0 for a mesh file, whose count is known once it is read),
+/// and how the case says it ("cells = [2, 2, 2]").
+std::pair<double, std::string> generated_tets(const BodySpec& spec);
+
+/// Refuses a scene of `total_tets` that cannot fit in memory(), before the allocations it
+/// drives; `cause` ("case.toml:5: body 'block': cells = [..]") says what brought the total there.
+/// @throws InputError naming `cause`, the memory needed and the limit with its source
+void check_memory(double total_tets, const std::string& cause);
 
 } // namespace coro::detail

@@ -183,7 +183,7 @@ TEST(LoadScene, RefusesABodyThatStartsBehindAPlane)
     const std::string plane = "[[obstacle]]\ntype = \"plane\"\npoint = [0.0, 3.0, 0.0]\n";
     EXPECT_THAT([&] { load("behind.toml", "[contact]\nenabled = true\n" + BLOCK + plane); },
                 ThrowsMessage<InputError>(AllOf(HasSubstr("behind.toml:8: plane obstacle: body 'block'"),
-                                                HasSubstr("lies entirely behind the plane, 2 to 3 below it"))));
+                                                HasSubstr("lies entirely behind the plane, 2 to 3 behind it"))));
     // Touching the plane (the top face on it) is a start, not a mistake.
     EXPECT_EQ(load("touching.toml", "[contact]\nenabled = true\n" + BLOCK +
                                         "[[obstacle]]\ntype = \"plane\"\npoint = [0.0, 1.0, 0.0]\n")
