@@ -5,19 +5,16 @@
 #include "detail/number_tokens.hpp"
 #include "detail/text_input.hpp"
 
+#include <corocontact/core/atomic_file.hpp>
 #include <corocontact/core/error.hpp>
 
 #include <algorithm>
 #include <array>
 #include <cctype>
-#include <cerrno>
 #include <charconv>
 #include <cmath>
 #include <cstdint>
-#include <cstdio>
-#include <cstring>
 #include <limits>
-#include <memory>
 #include <sstream>
 #include <string>
 #include <string_view>
@@ -465,15 +462,7 @@ void write_msh22(const std::filesystem::path& path, const TetMesh& mesh)
     }
     out += "$EndElements\n";
 
-    std::unique_ptr<std::FILE, int (*)(std::FILE*)> file(std::fopen(path.c_str(), "wb"),
-                                                         &std::fclose);
-    CORO_CHECK(file != nullptr, InputError,
-               path.string() << ": cannot open for writing: " << std::strerror(errno));
-    const std::size_t written = std::fwrite(out.data(), 1, out.size(), file.get());
-    CORO_CHECK(written == out.size(), InputError,
-               path.string() << ": write failed: " << std::strerror(errno));
-    CORO_CHECK(std::fclose(file.release()) == 0, InputError,
-               path.string() << ": write failed on close: " << std::strerror(errno));
+    write_file_atomically(path, out);
 }
 
 } // namespace coro
