@@ -175,9 +175,6 @@ Index validate_and_orient(TetMesh& mesh, const std::string& source)
         const auto& p = mesh.rest_positions;
         edge_sum += (p.row(mesh.tets(t, 1)) - p.row(mesh.tets(t, 0))).norm();
     }
-    if (const auto duplicate = find_duplicate_tet(mesh.tets))
-        CORO_THROW(InputError, source << ": tet " << duplicate->second << " has the same 4 nodes as tet " << duplicate->first
-                                      << " (expected every tet once; tets counted from 0 in file order)");
     const double mean_edge = edge_sum / mesh.num_tets();
     const double min_volume = 1e-12 * mean_edge * mean_edge * mean_edge;
     CORO_CHECK(min_volume > 0.0, InputError,
@@ -196,6 +193,11 @@ Index validate_and_orient(TetMesh& mesh, const std::string& source)
         }
     }
     if (const auto overlap = find_overlapping_tets(mesh)) {
+        // A tet listed twice overlaps its copy across all four faces: say so plainly.
+        if (const auto duplicate = find_duplicate_tet(mesh.tets))
+            CORO_THROW(InputError, source << ": tet " << duplicate->second << " has the same 4 nodes as tet "
+                                          << duplicate->first
+                                          << " (expected every tet once; tets counted from 0 in file order)");
         const std::array<Index, 3>& f = overlap->face;
         if (overlap->shared_by_more)
             CORO_THROW(InputError, source << ": more than two tets share the face (" << f[0] << ", " << f[1] << ", "

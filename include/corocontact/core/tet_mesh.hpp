@@ -59,9 +59,9 @@ std::optional<TetOverlap> find_overlapping_tets(const TetMesh& mesh);
 /// Validates a freshly read mesh and makes every tet positively oriented.
 ///
 /// Checks: at least one tet, finite coordinates of magnitude at most MAX_COORDINATE, indices
-/// in range, no node repeated within a tet, no tet listed twice, volume above a relative
-/// threshold (1e-12 × the mean edge length cubed, which must not underflow), and no two tets
-/// overlapping across a shared face. Negative-volume tets are reoriented (swap of nodes 2
+/// in range, no node repeated within a tet, volume above a relative threshold (1e-12 × the mean
+/// edge length cubed, which must not underflow), and no two tets overlapping across a shared
+/// face, a tet listed twice named as such. Negative-volume tets are reoriented (swap of nodes 2
 /// and 3).
 /// @param[in,out] mesh  the mesh, reoriented in place
 /// @param[in] source    name of the input (file or body) used in messages
