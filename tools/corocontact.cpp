@@ -105,7 +105,7 @@ int run_case(const RunOptions& options)
         std::cerr << "warning: " << lock.path().string() << ": taking over the lock of a run that ended without "
                   << "removing it (" << lock.stale_owner() << ")\n";
 
-    // Everything is loaded and checked before the output directory is touched.
+    // Everything is loaded and checked before anything but the lock file is written there.
     coro::LoadedScene loaded = coro::load_scene(spec);
     for (const std::string& warning : loaded.warnings)
         std::cerr << "warning: " << warning << "\n";
