@@ -86,7 +86,7 @@ TEST(PartitionTets, RejectsZeroParts)
 TEST(DefaultNumParts, FollowsTetCountNotThreads)
 {
     EXPECT_EQ(default_num_parts(100, 4), 1);
-    EXPECT_EQ(default_num_parts(200, 4), 3); // at most one part per 64 tets
+    EXPECT_EQ(default_num_parts(3 * MIN_TETS_PER_PART, 4), 3); // at most one part per MIN_TETS_PER_PART tets
     const Index many = default_num_parts(1000000, 4);
     EXPECT_GE(many, 4);
     EXPECT_EQ(many % 4, 0); // 4 per core of the machine
