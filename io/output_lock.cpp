@@ -92,7 +92,14 @@ std::string describe_owner(const std::string& text)
 OutputLock::OutputLock(fs::path dir, const std::string& command) : m_dir(std::move(dir))
 {
     std::error_code ec;
-    m_created_dir = fs::create_directories(m_dir, ec);
+    // The folders this lock makes, deepest first: removed again if the run writes nothing.
+    for (fs::path folder = m_dir.lexically_normal(); !folder.empty() && !fs::exists(folder, ec);
+         folder = folder.parent_path()) {
+        m_created.push_back(folder);
+        if (folder == folder.parent_path())
+            break;
+    }
+    fs::create_directories(m_dir, ec);
     if (ec || !fs::is_directory(m_dir))
         CORO_THROW(OutputError, m_dir.string() << ": cannot create the output folder ("
                                                << (ec ? ec.message() : std::string("a file of that name is in the way"))
@@ -137,8 +144,7 @@ OutputLock::OutputLock(fs::path dir, const std::string& command) : m_dir(std::mo
         const int error = errno;
         ::unlink(file.c_str());
         ::close(m_fd);
-        if (m_created_dir)
-            fs::remove(m_dir, ec);
+        remove_created_folders();
         fail(file, "cannot write the lock file of the output folder", error);
     }
 }
@@ -147,10 +153,15 @@ OutputLock::~OutputLock()
 {
     ::unlink(path().c_str());
     ::close(m_fd);
-    if (m_created_dir) {
-        std::error_code ec;
-        fs::remove(m_dir, ec); // only if empty: never what a run wrote
-    }
+    remove_created_folders();
+}
+
+void OutputLock::remove_created_folders() const
+{
+    std::error_code ec;
+    for (const fs::path& folder : m_created)
+        if (!fs::remove(folder, ec)) // only an empty folder: never what a run wrote
+            return;
 }
 
 fs::path OutputLock::path() const { return m_dir / LOCK_FILE; }

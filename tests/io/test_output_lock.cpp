@@ -96,6 +96,20 @@ TEST(OutputLock, TakesOverTheLockFileOfARunThatNoLongerHoldsIt)
     EXPECT_THAT(slurp(lock.path()), ::testing::Not(HasSubstr("4242")));
 }
 
+TEST(OutputLock, RemovesEveryEmptyFolderItMade)
+{
+    const fs::path dir = test::scratch_dir("lock_nested");
+    { const OutputLock lock(dir / "a" / "b" / "c", "x"); }
+    EXPECT_FALSE(fs::exists(dir / "a"));
+    EXPECT_TRUE(fs::is_directory(dir));
+    {
+        const OutputLock lock(dir / "a" / "b" / "c", "x");
+        test::write_text(dir / "a" / "note.txt", "written while the lock was held");
+    }
+    EXPECT_FALSE(fs::exists(dir / "a" / "b"));
+    EXPECT_TRUE(fs::is_regular_file(dir / "a" / "note.txt"));
+}
+
 TEST(OutputLock, KeepsAFolderThatExistedOrWasWrittenTo)
 {
     const fs::path dir = test::scratch_dir("lock_keep");

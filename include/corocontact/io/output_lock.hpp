@@ -9,6 +9,7 @@
 
 #include <filesystem>
 #include <string>
+#include <vector>
 
 namespace coro {
 
@@ -23,8 +24,8 @@ public:
     ///         that run as its lock file describes it
     OutputLock(std::filesystem::path dir, const std::string& command);
 
-    /// Removes the lock file and lets go of the lock; removes the folder too if this lock
-    /// created it and it is empty (a run refused for bad input leaves nothing behind).
+    /// Removes the lock file and lets go of the lock; removes the folders this lock made too,
+    /// as far as they are empty (a run refused for bad input leaves nothing behind).
     ~OutputLock();
 
     OutputLock(const OutputLock&) = delete;
@@ -39,9 +40,11 @@ public:
     const std::string& stale_owner() const { return m_stale_owner; }
 
 private:
+    void remove_created_folders() const;
+
     std::filesystem::path m_dir;
     int m_fd = -1;
-    bool m_created_dir = false;
+    std::vector<std::filesystem::path> m_created; ///< folders this lock made, deepest first
     std::string m_stale_owner;
 };
 
