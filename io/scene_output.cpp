@@ -99,7 +99,7 @@ std::vector<FrameBlock> scene_frame(const Scene& scene)
         for (const PlaneObstacle& plane : scene.planes)
             extend(plane.point.transpose());
         for (std::size_t k = 0; k < scene.planes.size(); ++k)
-            blocks.push_back(detail::plane_patch(scene.planes[k], lo, hi, "plane" + std::to_string(k)));
+            blocks.push_back(detail::plane_patch(scene.planes[k], lo, hi, plane_block_name(static_cast<Index>(k))));
     }
     return blocks;
 }
