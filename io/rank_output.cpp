@@ -49,17 +49,26 @@ RankFrames::RankFrames(Communicator& communicator, VtkSeriesWriter& writer, cons
 void RankFrames::write(Index step, double time, const Scene& scene)
 {
     const bool root = m_communicator.rank() == 0;
-    run_collectively(&m_communicator, [&] {
-        std::vector<FrameBlock> blocks = body_blocks(scene);
-        if (root)
-            for (FrameBlock& obstacle : obstacle_blocks(scene, m_bounds))
-                blocks.push_back(std::move(obstacle));
-        m_writer.write_blocks(step, m_names, blocks);
-    });
-    run_collectively(&m_communicator, [&] {
-        if (root)
-            m_writer.list_frame(step, time, m_names);
-    });
+    std::vector<std::filesystem::path> written;
+    try {
+        run_collectively(&m_communicator, [&] {
+            std::vector<FrameBlock> blocks = body_blocks(scene);
+            if (root)
+                for (FrameBlock& obstacle : obstacle_blocks(scene, m_bounds))
+                    blocks.push_back(std::move(obstacle));
+            written = m_writer.write_blocks(step, m_names, blocks);
+        });
+        run_collectively(&m_communicator, [&] {
+            if (root)
+                m_writer.list_frame(step, time, m_names);
+        });
+    } catch (...) {
+        // The frame is not listed; none of its blocks stays (a rewritten step keeps the new ones).
+        std::error_code ignored;
+        for (const std::filesystem::path& file : written)
+            std::filesystem::remove(file, ignored);
+        throw;
+    }
 }
 
 std::vector<RankLoad> gather_rank_loads(Communicator& communicator, const Scene& scene, const RankStats& stats)

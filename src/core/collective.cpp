@@ -9,7 +9,7 @@
 namespace coro {
 
 namespace {
-enum class Kind : char { INPUT = 'I', NUMERICAL = 'N', OTHER = 'O' };
+enum class Kind : char { INPUT = 'I', OUTPUT = 'W', NUMERICAL = 'N', OTHER = 'O' };
 } // namespace
 
 void run_collectively(Communicator* communicator, FunctionRef<void()> work)
@@ -25,6 +25,10 @@ void run_collectively(Communicator* communicator, FunctionRef<void()> work)
     } catch (const InputError& error) {
         failure = std::current_exception();
         report.push_back(static_cast<char>(Kind::INPUT));
+        report.insert(report.end(), error.what(), error.what() + std::char_traits<char>::length(error.what()));
+    } catch (const OutputError& error) {
+        failure = std::current_exception();
+        report.push_back(static_cast<char>(Kind::OUTPUT));
         report.insert(report.end(), error.what(), error.what() + std::char_traits<char>::length(error.what()));
     } catch (const NumericalError& error) {
         failure = std::current_exception();
@@ -45,6 +49,7 @@ void run_collectively(Communicator* communicator, FunctionRef<void()> work)
     const std::string message(report.begin() + 1, report.end());
     switch (static_cast<Kind>(report.front())) {
     case Kind::INPUT: throw InputError(message);
+    case Kind::OUTPUT: throw OutputError(message);
     case Kind::NUMERICAL: throw NumericalError(message);
     case Kind::OTHER: break;
     }

@@ -5,6 +5,7 @@
 #include <corocontact/core/error.hpp>
 #include <corocontact/sim/divergence_check.hpp>
 #include <corocontact/sim/rank_contact.hpp>
+#include <corocontact/sim/run_notes.hpp>
 #include <corocontact/solver/rank_exchange.hpp>
 #include <corocontact/sim/scene_contact.hpp>
 #include <corocontact/sim/static_solver.hpp>
@@ -63,12 +64,14 @@ struct Simulation::Ranks {
     std::optional<RankContact> contact; // with contact enabled
     std::uint64_t step_bytes = 0;  // received during the steps of this run
     std::uint64_t solve_bytes = 0; // of those, during the solves
+    std::size_t case_bodies = 0;   // bodies of all processes
     Index steps = 0;              // steps of this run
     Index cross_rank = 0;         // contacts detected here that touch another process, summed
 
     Ranks(const SceneDistribution& distribution, const Scene& scene, const SceneMatrix& matrix, bool with_contact)
         : communicator(*distribution.communicator),
-          exchange(communicator, chunk_bodies(distribution, matrix), matrix.num_block_rows())
+          exchange(communicator, chunk_bodies(distribution, matrix), matrix.num_block_rows()),
+          case_bodies(distribution.ownership.owner.size())
     {
         if (with_contact)
             contact.emplace(communicator, distribution.ownership, distribution.body_ids, scene);
@@ -102,14 +105,14 @@ Simulation::Simulation(Scene& scene, const CaseSpec& spec, const SceneDistributi
     : m_scene(scene), m_spec(spec), m_system(scene.bodies), m_divergence(scene.bodies)
 {
     const bool distributed = distribution != nullptr && distribution->communicator != nullptr;
-    CORO_CHECK(!distributed || !spec.contact.enabled || spec.contact.cross_check != CrossCheck::EMBREE, InputError,
+    CORO_CHECK(!distributed || !contact_applies(spec) || spec.contact.cross_check != CrossCheck::EMBREE, InputError,
                spec.file.string() << ": contact.cross_check = \"embree\" runs in one process only (expected "
                                      "\"none\" under mpirun with several processes)");
-    if (spec.contact.enabled)
+    if (contact_applies(spec))
         m_scene.surfaces = make_scene_surfaces(m_scene);
     if (distributed)
-        m_ranks = std::make_unique<Ranks>(*distribution, m_scene, m_system.matrix(), spec.contact.enabled);
-    if (!spec.contact.enabled)
+        m_ranks = std::make_unique<Ranks>(*distribution, m_scene, m_system.matrix(), contact_applies(spec));
+    if (!contact_applies(spec))
         return;
     if (spec.contact.cross_check == CrossCheck::EMBREE) {
 #if CORO_WITH_EMBREE
@@ -130,7 +133,7 @@ void Simulation::collectively(FunctionRef<void()> work)
 
 void Simulation::detect(RunSummary& summary)
 {
-    if (!m_spec.contact.enabled)
+    if (!contact_applies(m_spec))
         return;
     ScopedTimer timer(summary.phases.contact);
     if (m_ranks) {
@@ -208,10 +211,13 @@ void Simulation::static_step(Index load_step)
                 throw;
             CORO_THROW(NumericalError, "body '" << body.name() << "': " << what);
         }
-        ++m_totals.solves;
+        m_totals.solves += result.solves;
         m_totals.cg_iterations_mean += result.cg_iterations;
-        m_totals.cg_residual_mean += result.residual;
+        m_totals.cg_residual_mean += result.cg_residual_sum;
+        m_totals.solves_not_converged += result.solves_not_converged;
         m_totals.static_not_converged += result.converged ? 0 : 1;
+        m_totals.static_iterations_mean += result.iterations;
+        m_totals.static_iterations_max = std::max(m_totals.static_iterations_max, result.iterations);
     }
 }
 
@@ -233,7 +239,7 @@ void Simulation::start(Index resume_step, const RunSummary& resume)
             // Counters summed over the processes (totals()) continue from rank 0's.
             m_totals.contacts_mean = 0.0;
             if (m_spec.simulation.analysis == Analysis::STATIC) {
-                m_totals.cg_iterations_mean = m_totals.cg_residual_mean = 0.0;
+                m_totals.cg_iterations_mean = m_totals.cg_residual_mean = m_totals.static_iterations_mean = 0.0;
                 m_totals.solves = m_totals.solves_not_converged = m_totals.static_not_converged = 0;
             }
         }
@@ -304,11 +310,15 @@ RunSummary Simulation::totals() const
     if (m_spec.simulation.analysis == Analysis::STATIC) {
         totals.cg_iterations_mean = sum_over_ranks(communicator, totals.cg_iterations_mean);
         totals.cg_residual_mean = sum_over_ranks(communicator, totals.cg_residual_mean);
+        totals.static_iterations_mean = sum_over_ranks(communicator, totals.static_iterations_mean);
         std::int64_t counts[] = {totals.solves, totals.solves_not_converged, totals.static_not_converged};
         communicator.all_reduce(counts, 3, Reduction::SUM);
         totals.solves = static_cast<Index>(counts[0]);
         totals.solves_not_converged = static_cast<Index>(counts[1]);
         totals.static_not_converged = static_cast<Index>(counts[2]);
+        std::int64_t most = totals.static_iterations_max;
+        communicator.all_reduce(&most, 1, Reduction::MAX);
+        totals.static_iterations_max = static_cast<Index>(most);
     }
     return totals;
 }
@@ -339,6 +349,9 @@ RunSummary Simulation::summary() const
     }
     if (summary.detections > 0)
         summary.contacts_mean /= summary.detections;
+    const std::size_t bodies = m_ranks ? m_ranks->case_bodies : m_scene.bodies.size();
+    if (m_spec.simulation.analysis == Analysis::STATIC && summary.steps > 0)
+        summary.static_iterations_mean /= static_cast<double>(summary.steps) * static_cast<double>(bodies);
     return summary;
 }
 

@@ -10,7 +10,7 @@ namespace coro {
 
 /// Runs `work` here and makes its outcome common. If it throws on any process, every process
 /// throws: the lowest failing rank its own exception, the others one of the same kind
-/// (InputError, NumericalError, else std::runtime_error) with that rank's message, so rank 0
+/// (InputError, OutputError, NumericalError, else std::runtime_error) with that rank's message, so rank 0
 /// can report it and every process exits with the same code. Collective; `work` itself must not
 /// communicate. Without a communicator (one process) it only runs `work`.
 void run_collectively(Communicator* communicator, FunctionRef<void()> work);

@@ -26,7 +26,7 @@ public:
                const std::vector<Index>& body_ids);
 
     /// Writes one frame of the scene's current state. Collective; a file that cannot be written
-    /// on any process throws on all (run_collectively), the frame then unlisted.
+    /// on any process throws OutputError on all (run_collectively), and the frame's files go.
     void write(Index step, double time, const Scene& scene);
 
 private:

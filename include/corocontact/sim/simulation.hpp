@@ -50,6 +50,8 @@ struct RunSummary {
     Index solves = 0;              ///< PCG solves done
     Index solves_not_converged = 0; ///< solves that stopped at the iteration cap
     Index static_not_converged = 0; ///< static load steps that missed static_tolerance
+    double static_iterations_mean = 0.0; ///< static: Newton iterations per load step and body
+    Index static_iterations_max = 0;     ///< static: the most Newton iterations of a load step
     double max_contact_depth = 0.0;  ///< deepest penetration seen by any detection [m]
     double contacts_mean = 0.0;      ///< inside vertices per detection
     Index detections = 0;            ///< detection passes (initial state and every step)
