@@ -160,7 +160,7 @@ Index RankContact::global_surface(Index surface) const
     return m_copies[at(surface - bodies - m_num_obstacles)].body;
 }
 
-Index RankContact::exchange_surfaces(const std::vector<std::pair<Index, Index>>& pairs, Scene& scene)
+void RankContact::exchange_surfaces(const std::vector<std::pair<Index, Index>>& pairs, Scene& scene)
 {
     const int ranks = m_communicator.size(), me = m_communicator.rank();
     // Which of this process's bodies each rank needs: the other body of a pair it owns.
@@ -213,7 +213,6 @@ Index RankContact::exchange_surfaces(const std::vector<std::pair<Index, Index>>&
     }
     m_communicator.exchange(m_send, m_receive);
 
-    Index received = 0;
     for (int r = 0; r < ranks; ++r) {
         if (r == me)
             continue;
@@ -261,10 +260,8 @@ Index RankContact::exchange_surfaces(const std::vector<std::pair<Index, Index>>&
             surface.tree.refit(surface.vertices);
             for (Vec3& v : copy.velocities)
                 in.get(v.data(), 3);
-            ++received;
         }
     }
-    return received;
 }
 
 RankContact::Counts RankContact::detect(Scene& scene, const ContactSettings& settings, double dt,
@@ -303,7 +300,7 @@ RankContact::Counts RankContact::detect(Scene& scene, const ContactSettings& set
         boxes[at(m_num_bodies + k)] = scene.surfaces[at(n_local + k)].tree.bounds();
     const std::vector<std::pair<Index, Index>> pairs = overlapping_pairs(boxes);
 
-    counts.surfaces_received = exchange_surfaces(pairs, scene);
+    exchange_surfaces(pairs, scene);
 
     // This process's pairs, in its surface numbering, and their contacts in the case's order.
     std::vector<std::pair<Index, Index>> own_pairs;
@@ -313,7 +310,6 @@ RankContact::Counts RankContact::detect(Scene& scene, const ContactSettings& set
             own_pairs.emplace_back(std::min(x, y), std::max(x, y));
         }
     std::sort(own_pairs.begin(), own_pairs.end());
-    counts.pairs = static_cast<Index>(own_pairs.size());
     std::vector<ContactPoint> found = detect_contacts(scene.surfaces, own_pairs, detection_settings(settings));
     if (!scene.planes.empty()) {
         const std::vector<ContactPoint> planes = detect_plane_contacts(scene.surfaces, n_local, scene.planes);

@@ -36,11 +36,9 @@ public:
     /// What one detection found, counted where it was detected (sums over processes are the
     /// one-process numbers).
     struct Counts {
-        Index contacts = 0;           ///< contact points detected here
-        Index cross_rank = 0;         ///< of those, touching nodes of another process
-        double max_depth = 0.0;       ///< deepest of them [m]
-        Index pairs = 0;              ///< overlapping pairs detected here
-        Index surfaces_received = 0;  ///< remote surfaces received for them
+        Index contacts = 0;     ///< contact points detected here
+        Index cross_rank = 0;   ///< of those, touching nodes of another process
+        double max_depth = 0.0; ///< deepest of them [m]
     };
 
     /// Collective. Takes the scene's surfaces as they are now (built from the start positions)
@@ -80,8 +78,7 @@ private:
     Index pair_owner(Index a) const;
     /// Sends the surfaces of this process's bodies to the owners of their pairs, and takes in
     /// those it needs itself (copies created or refreshed). Collective.
-    /// @return the remote surfaces received
-    Index exchange_surfaces(const std::vector<std::pair<Index, Index>>& pairs, Scene& scene);
+    void exchange_surfaces(const std::vector<std::pair<Index, Index>>& pairs, Scene& scene);
     /// Scene surface of a case surface (bodies, then obstacle meshes), or −1 if not held here.
     Index local_surface(Index global) const;
     /// Case surface of a scene surface.
