@@ -26,6 +26,7 @@ packages=(
   libgtest-dev libgmock-dev libbenchmark-dev
   calculix-ccx python3-matplotlib
   python3-vtk9 python3-numpy xvfb xauth libgl1-mesa-dri
+  pybind11-dev python3-pybind11 python3-dev python3-pytest
 )
 
 missing=()
