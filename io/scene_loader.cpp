@@ -7,6 +7,7 @@
 #include <corocontact/core/surface_mesh.hpp>
 #include <corocontact/partition/partition.hpp>
 
+#include <algorithm>
 #include <sstream>
 
 namespace coro {
@@ -24,6 +25,53 @@ void warn_if_open(const Tris& faces, const std::string& what, std::vector<std::s
             << " open, " << check.nonmanifold_edges << " non-manifold, " << check.misoriented_edges
             << " misoriented edges); contact tests points against it by the winding number only";
     warnings.push_back(message.str());
+}
+
+/// Static analysis solves K' u = f once per load step, and K' is singular when the fixed nodes
+/// (those of tets; nodes of no tet are fixed but hold nothing) leave a rigid motion free: none
+/// leaves all six, all on one line the rotation about it. Named here instead of as a solver
+/// breakdown later.
+void check_static_support(const Body& body, const BodySpec& spec, const std::vector<Index>& unused)
+{
+    std::vector<char> holds = body.fixed();
+    for (const Index v : unused)
+        holds[static_cast<std::size_t>(v)] = 0;
+    const Positions& rest = body.mesh().rest_positions;
+    std::vector<Index> fixed;
+    for (Index v = 0; v < static_cast<Index>(holds.size()); ++v)
+        if (holds[static_cast<std::size_t>(v)] != 0)
+            fixed.push_back(v);
+    const std::string who = spec.location + ": body '" + spec.name + "'";
+    const std::string remedy = "add a [[body.fixed]] box (nodes inside it do not move) that holds it, or "
+                               "use analysis = \"dynamic\"";
+    CORO_CHECK(!fixed.empty(), InputError,
+               who << ": static analysis, but no node of the body is fixed, so its rigid-body motion is "
+                      "unconstrained and there is no equilibrium to solve for; "
+                   << remedy);
+    // Collinear within a tolerance relative to the body's size: the farthest fixed node from
+    // the first spans the line, and no fixed node is off it.
+    const double size = (rest.colwise().maxCoeff() - rest.colwise().minCoeff()).norm();
+    const double tolerance = 1e-9 * size;
+    const Vec3 origin = rest.row(fixed.front()).transpose();
+    Vec3 direction = Vec3::Zero();
+    for (const Index v : fixed) {
+        const Vec3 d = rest.row(v).transpose() - origin;
+        if (d.norm() > direction.norm())
+            direction = d;
+    }
+    double off_line = 0.0;
+    if (direction.norm() > tolerance) {
+        const Vec3 axis = direction.normalized();
+        for (const Index v : fixed) {
+            const Vec3 d = rest.row(v).transpose() - origin;
+            off_line = std::max(off_line, (d - d.dot(axis) * axis).norm());
+        }
+    }
+    CORO_CHECK(off_line > tolerance, InputError,
+               who << ": static analysis, but its " << fixed.size() << " fixed node"
+                   << (fixed.size() == 1 ? " leaves" : "s lie on one line, which leaves")
+                   << " the rotation about " << (fixed.size() == 1 ? "it" : "that line")
+                   << " unconstrained, so there is no equilibrium to solve for; " << remedy);
 }
 
 } // namespace
@@ -66,13 +114,25 @@ TetMesh load_body_mesh(const BodySpec& spec, std::vector<std::string>& warnings)
     return mesh;
 }
 
-LoadedScene load_scene(const CaseSpec& spec)
+LoadedScene load_scene(const CaseSpec& spec, const LoadProgress& progress)
 {
+    const auto report = [&](const std::string& stage) {
+        if (progress)
+            progress(stage);
+    };
     LoadedScene loaded;
-    for (const BodySpec& body_spec : spec.bodies) {
+    for (std::size_t b = 0; b < spec.bodies.size(); ++b) {
+        const BodySpec& body_spec = spec.bodies[b];
+        const std::string which =
+            "body '" + body_spec.name + "' (" + std::to_string(b + 1) + " of " + std::to_string(spec.bodies.size()) + ")";
+        report(which + ": " +
+               (body_spec.shape == BodyShape::MESH ? "reading " + body_spec.mesh.filename().string() : "meshing"));
         const TetMesh mesh = load_body_mesh(body_spec, loaded.warnings);
+        report(which + ": METIS parts and element set-up, " + std::to_string(mesh.num_tets()) +
+               (mesh.num_tets() == 1 ? " tet" : " tets"));
         Body body(mesh, body_spec, default_num_parts(mesh.num_tets(), spec.solver.parts_per_thread));
         if (!body_spec.surface.empty()) {
+            report(which + ": embedding " + body_spec.surface.filename().string());
             SurfaceMesh surface;
             try {
                 surface = read_surface(body_spec.surface);
@@ -88,6 +148,8 @@ LoadedScene load_scene(const CaseSpec& spec)
             body.embed_surface(std::move(surface));
         }
         const std::vector<Index> unused = unreferenced_vertices(body.mesh());
+        if (spec.simulation.analysis == Analysis::STATIC)
+            check_static_support(body, body_spec, unused);
         for (const Index v : unused)
             body.fix_vertex(v);
         if (!unused.empty())
@@ -101,6 +163,7 @@ LoadedScene load_scene(const CaseSpec& spec)
             loaded.scene.planes.push_back({obstacle.point, obstacle.normal.normalized()});
             continue;
         }
+        report("obstacle: reading " + obstacle.mesh.filename().string());
         SurfaceMesh surface;
         try {
             surface = read_surface(obstacle.mesh);

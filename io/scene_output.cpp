@@ -1,11 +1,14 @@
 #include <corocontact/io/scene_output.hpp>
 
+#include "detail/plane_patch.hpp"
+
 #include <corocontact/core/embedding.hpp>
 #include <corocontact/core/error.hpp>
 #include <corocontact/sim/scene_contact.hpp>
 
 #include <fstream>
 #include <iomanip>
+#include <limits>
 #include <sstream>
 
 namespace coro {
@@ -80,6 +83,24 @@ std::vector<FrameBlock> scene_frame(const Scene& scene)
         block.tris = scene.obstacle_meshes[k].faces;
         blocks.push_back(std::move(block));
     }
+    if (!scene.planes.empty()) {
+        // Planes are infinite: drawn over the scene's bounds at rest, the same in every frame.
+        Vec3 lo = Vec3::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
+        const auto extend = [&](const auto& points) {
+            if (points.rows() > 0) {
+                lo = lo.cwiseMin(points.colwise().minCoeff().transpose());
+                hi = hi.cwiseMax(points.colwise().maxCoeff().transpose());
+            }
+        };
+        for (const Body& body : scene.bodies)
+            extend(body.mesh().rest_positions);
+        for (const SurfaceMesh& mesh : scene.obstacle_meshes)
+            extend(mesh.vertices);
+        for (const PlaneObstacle& plane : scene.planes)
+            extend(plane.point.transpose());
+        for (std::size_t k = 0; k < scene.planes.size(); ++k)
+            blocks.push_back(detail::plane_patch(scene.planes[k], lo, hi, "plane" + std::to_string(k)));
+    }
     return blocks;
 }
 
@@ -92,6 +113,7 @@ std::string summary_json(const RunSummary& summary, const SummaryContext& contex
         << "  \"steps\": " << summary.steps << ",\n"
         << "  \"wall_s\": " << summary.wall_s << ",\n"
         << "  \"steps_per_s\": " << summary.steps_per_s << ",\n"
+        << "  \"setup_s\": " << context.setup_s << ",\n"
         << "  \"threads\": " << context.threads << ",\n"
         << "  \"bodies\": " << context.bodies << ",\n"
         << "  \"tets\": " << context.tets << ",\n"

@@ -13,7 +13,9 @@ import math
 import pathlib
 
 SIZES = [0.09, 0.11, 0.13, 0.15]  # sphere radius / half box edge [m]
-SPACING = 0.34                    # grid pitch [m]: bodies start 0.04 m apart at the largest size
+REACH = 0.15 * 3 ** 0.5           # farthest a corner of the largest (rotated) box reaches [m]
+SPACING = 2 * REACH + 0.02        # grid pitch [m]: no two bodies overlap at the start
+BOTTOM = REACH + 0.02             # height of the lowest layer's centres [m]
 
 
 def sphere_resolution(tets):
@@ -77,8 +79,8 @@ friction = 0.4
                     break
                 size = SIZES[(i + 2 * j + 3 * k) % 4]
                 # Alternate layers are shifted so that bodies land on each other, not in columns.
-                shift = 0.04 * (j % 2)
-                centre = (-0.5 * (side - 1) * SPACING + i * SPACING + shift, 0.2 + j * SPACING,
+                shift = 0.06 * (j % 2)
+                centre = (-0.5 * (side - 1) * SPACING + i * SPACING + shift, BOTTOM + j * SPACING,
                           -0.5 * (side - 1) * SPACING + k * SPACING + shift)
                 lines += ["[[body]]", f'name = "body{index:04d}"']
                 if (i + j + k) % 2 == 0:

@@ -28,11 +28,13 @@ inline std::string slurp(const std::filesystem::path& path)
     return text.str();
 }
 
-inline Outcome run(const std::string& arguments, const std::filesystem::path& dir)
+/// Runs `corocontact ARGUMENTS` in the shell, stdout and stderr kept in `dir`; `environment`
+/// (e.g. "CORO_DEBUG=1") is set for that command only.
+inline Outcome run(const std::string& arguments, const std::filesystem::path& dir, const std::string& environment = "")
 {
     const std::filesystem::path out = dir / "stdout.txt", err = dir / "stderr.txt";
-    const std::string command = std::string(CORO_CLI_PATH) + " " + arguments + " > " + out.string() + " 2> " +
-                                err.string() + " < /dev/null";
+    const std::string command = (environment.empty() ? "" : "env " + environment + " ") + std::string(CORO_CLI_PATH) +
+                                " " + arguments + " > " + out.string() + " 2> " + err.string() + " < /dev/null";
     const int status = std::system(command.c_str());
     return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, slurp(out), slurp(err)};
 }

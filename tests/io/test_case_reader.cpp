@@ -709,7 +709,7 @@ TEST(ReadCase, DocumentedExamplesParse)
     EXPECT_EQ(spec.simulation.output_dir, fs::path("out") / "drop");
     ASSERT_EQ(spec.bodies.size(), 3u);
     EXPECT_EQ(spec.bodies[0].mesh, dir / "cases" / "drop" / "meshes" / "sphere.msh");
-    EXPECT_EQ(spec.bodies[0].surface, dir / "cases" / "shared" / "sphere_fine.obj");
+    EXPECT_EQ(spec.bodies[0].surface, dir / "cases" / "common" / "sphere_fine.obj");
     EXPECT_EQ(spec.bodies[1].shape, coro::BodyShape::BOX);
     EXPECT_EQ(spec.bodies[1].fixed.size(), 1u);
     EXPECT_EQ(spec.bodies[1].loads.size(), 1u);

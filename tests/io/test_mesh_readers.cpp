@@ -219,6 +219,9 @@ struct GmshFile {
     double rel_tol; // the polyhedral ball is inscribed: 4.4% below for these 503 tets
 };
 
+/// What a failing test prints as its parameter: the file, not the struct's bytes.
+void PrintTo(const GmshFile& file, std::ostream* os) { *os << file.name; }
+
 class ReadMshGmshFile : public ::testing::TestWithParam<GmshFile> {};
 
 TEST_P(ReadMshGmshFile, HasAnalyticVolumeAfterOrientation)

@@ -2,6 +2,7 @@
 
 #include <corocontact/io/scene_loader.hpp>
 
+#include <corocontact/core/error.hpp>
 #include <corocontact/io/case_reader.hpp>
 #include <corocontact/io/mesh_readers.hpp>
 
@@ -21,6 +22,7 @@ using ::testing::AllOf;
 using ::testing::Contains;
 using ::testing::HasSubstr;
 using ::testing::IsEmpty;
+using ::testing::ThrowsMessage;
 
 const fs::path& scratch()
 {
@@ -56,6 +58,38 @@ TEST(LoadScene, NoSurfaceWarningForAClosedMesh)
     write_msh22(scratch() / "tet.msh", test::unit_tet());
     const LoadedScene loaded = load("tet.toml", "[[body]]\nmesh = \"tet.msh\"\n");
     EXPECT_THAT(loaded.warnings, IsEmpty());
+}
+
+TEST(LoadScene, TellsWhatItDoesBeforeEachStage)
+{
+    write_msh22(scratch() / "stage_tet.msh", test::unit_tet());
+    const fs::path file = test::write_text(scratch() / "stages.toml", "[[body]]\nname = \"a\"\nmesh = \"stage_tet.msh\"\n"
+                                                                    "[[body]]\nname = \"b\"\nshape = \"box\"\n");
+    std::vector<std::string> stages;
+    load_scene(read_case(file), [&](const std::string& stage) { stages.push_back(stage); });
+    EXPECT_EQ(stages, (std::vector<std::string>{"body 'a' (1 of 2): reading stage_tet.msh",
+                                                "body 'a' (1 of 2): METIS parts and element set-up, 1 tet",
+                                                "body 'b' (2 of 2): meshing",
+                                                "body 'b' (2 of 2): METIS parts and element set-up, 6 tets"}));
+}
+
+TEST(LoadScene, StaticBodyMustBeHeldAgainstRigidMotion)
+{
+    const std::string box = "[simulation]\nanalysis = \"static\"\n[[body]]\nname = \"b\"\nshape = \"box\"\n"
+                            "max = [2.0, 1.0, 1.0]\ncells = [2, 1, 1]\n";
+    EXPECT_THAT([&] { load("free.toml", box); },
+                ThrowsMessage<InputError>(AllOf(HasSubstr("free.toml:3: body 'b': static analysis"),
+                                                HasSubstr("no node of the body is fixed"))));
+    // One fixed node: it can turn about it.
+    EXPECT_THAT([&] { load("point.toml", box + "[[body.fixed]]\nmax = [0.01, 0.01, 0.01]\n"); },
+                ThrowsMessage<InputError>(HasSubstr("its 1 fixed node leaves the rotation about it unconstrained")));
+    // Three fixed nodes on the line y = z = 0: it can turn about that line.
+    EXPECT_THAT([&] { load("line.toml", box + "[[body.fixed]]\nmax = [2.0, 0.01, 0.01]\n"); },
+                ThrowsMessage<InputError>(HasSubstr("its 3 fixed nodes lie on one line")));
+    // Three fixed nodes not on one line hold it; dynamic analysis needs none.
+    EXPECT_NO_THROW(load("corner.toml", box + "[[body.fixed]]\nmax = [1.0, 0.01, 0.01]\n[[body.fixed]]\n"
+                                              "max = [0.01, 1.0, 0.01]\n"));
+    EXPECT_NO_THROW(load("dynamic.toml", "[[body]]\nshape = \"box\"\n"));
 }
 
 TEST(LoadScene, WarnsWhenAnEmbeddedSurfaceIsOpen)

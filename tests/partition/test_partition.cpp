@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <array>
 #include <map>
+#include <string>
 
 using namespace coro;
 using ::testing::HasSubstr;
@@ -60,7 +61,8 @@ TEST_P(PartitionTetsParts, CoversEveryTetOnceBalancedWithCorrectEdgeCut)
     }
 }
 
-INSTANTIATE_TEST_SUITE_P(Counts, PartitionTetsParts, ::testing::Values(1, 2, 3, 8, 16));
+INSTANTIATE_TEST_SUITE_P(Counts, PartitionTetsParts, ::testing::Values(1, 2, 3, 8, 16),
+                         [](const ::testing::TestParamInfo<Index>& param_info) { return "Parts" + std::to_string(param_info.param); });
 
 TEST(PartitionTets, SameMeshSamePartition)
 {
