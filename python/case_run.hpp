@@ -12,6 +12,7 @@
 
 #include <filesystem>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -23,11 +24,12 @@ public:
     /// detection (Simulation::start), as `corocontact run` does.
     /// @param[in] case_file   the .toml case file
     /// @param[in] threads     worker threads, ≥ 1, held by a tbb::global_control for the lifetime
-    ///                        of this object; 0: TBB's default (all cores)
+    ///                        of this object; none: TBB's default (all cores)
     /// @param[in] output_dir  where write_frame() and write_summary() write; empty: the case's
     ///                        simulation.output_dir (like `run --out`)
     /// @throws InputError for bad input, with the message `corocontact run` prints
-    CaseRun(const std::filesystem::path& case_file, Index threads, const std::filesystem::path& output_dir);
+    CaseRun(const std::filesystem::path& case_file, std::optional<Index> threads,
+            const std::filesystem::path& output_dir);
     ~CaseRun();
     CaseRun(const CaseRun&) = delete;
     CaseRun& operator=(const CaseRun&) = delete;
@@ -92,6 +94,7 @@ private:
     std::unique_ptr<VtkSeriesWriter> m_writer;       // made by the first write_frame()
     Index m_last_frame = -1;                         // step of the last frame written
     double m_output_s = 0.0;                         // time spent in write_frame() [s]
+    double m_setup_s = 0.0;                          // reading and loading the case [s]
 };
 
 } // namespace coro::python

@@ -26,7 +26,8 @@ namespace {
 /// state that is being written.
 class SharedRun {
 public:
-    SharedRun(const std::filesystem::path& case_file, Index threads, const std::filesystem::path& output_dir)
+    SharedRun(const std::filesystem::path& case_file, std::optional<Index> threads,
+              const std::filesystem::path& output_dir)
         : m_run(case_file, threads, output_dir)
     {
     }
@@ -238,8 +239,11 @@ warnings while loading come as InputWarning. The initial detection runs here, so
         .def(py::init([](const std::filesystem::path& case_path, std::optional<Index> threads,
                          std::optional<std::filesystem::path> output_dir) {
                  SimulationObject object;
-                 object.run = std::make_shared<SharedRun>(case_path, threads ? *threads : 0,
-                                                          output_dir ? *output_dir : std::filesystem::path());
+                 {
+                     py::gil_scoped_release release; // loading a large case takes a while
+                     object.run = std::make_shared<SharedRun>(case_path, threads,
+                                                              output_dir ? *output_dir : std::filesystem::path());
+                 }
                  object.bodies = make_bodies(object.run);
                  warn(object.run->get().load_warnings());
                  return object;

@@ -93,7 +93,7 @@ def test_values_set_from_python_are_checked_like_the_case_files(spheres):
     assert np.all(np.isfinite(body.velocities)) and not body.loads.any()
 
 
-def test_fixed_nodes_keep_velocity_zero(tmp_path):
+def test_fixed_nodes_keep_velocity_zero():
     sim = corocontact.Simulation(SOURCE_DIR / "cases" / "cantilever" / "cantilever_dynamic.toml")
     beam = sim.bodies[0]
     node = int(np.flatnonzero(beam.fixed)[0])
@@ -102,13 +102,18 @@ def test_fixed_nodes_keep_velocity_zero(tmp_path):
         beam.velocities = [1.0, 0.0, 0.0]
 
 
-def test_contact_settings_need_contact(tmp_path):
+def test_contact_settings_need_contact():
     sim = corocontact.Simulation(SOURCE_DIR / "cases" / "cantilever" / "cantilever_dynamic.toml")
     with pytest.raises(corocontact.InputError, match=r"contact.friction: the case has no contact"):
         sim.contact_friction = 0.3
 
 
-def test_frames_once_per_step(tmp_path, spheres):
+def test_threads_must_be_positive():
+    with pytest.raises(corocontact.InputError, match=r"threads = 0: expected an integer >= 1, or None for all cores"):
+        corocontact.Simulation(CASES / "two_spheres" / "two_spheres.toml", threads=0)
+
+
+def test_frames_once_per_step(tmp_path):
     sim = corocontact.Simulation(CASES / "two_spheres" / "two_spheres.toml", output_dir=tmp_path)
     assert sim.write_frame() == tmp_path / "two_spheres.pvd"
     with pytest.raises(corocontact.InputError, match="the frame of step 0 is already written"):
