@@ -2,8 +2,8 @@
 """What stepping a case from Python costs against the corocontact command: the same run (case,
 steps, frames at output_every, threads) done by `corocontact run` and by the Python module in a
 Python process of its own, alternately, several times. Prints the median times of both and
-their ratio: the time loop (summary.json wall_s: steps and frames, loading excluded) and the
-whole process (start, loading, run, exit).
+their ratio: the time loop (summary.json wall_s: steps and frames, loading excluded), the
+whole process (start, loading, run, exit) and its CPU time (user + system, all threads).
 
     PYTHONPATH=build/python /usr/bin/python3 tools/bench_python.py [CASE] [--steps N]
         [--threads N] [--repeat N] [--cli build/bin/corocontact]
@@ -12,6 +12,7 @@ import argparse
 import json
 import os
 import pathlib
+import resource
 import statistics
 import subprocess
 import sys
@@ -41,13 +42,19 @@ def cpu_name():
     return "unknown CPU"
 
 
+def cpu_seconds_of_children():
+    usage = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return usage.ru_utime + usage.ru_stime
+
+
 def timed_run(command, out, name, env=None):
-    """(process wall time, summary wall_s) of one run writing into `out`."""
+    """(process wall time, summary wall_s, process CPU time) of one run writing into `out`."""
+    cpu = cpu_seconds_of_children()
     start = time.perf_counter()
     subprocess.run(command, check=True, stdout=subprocess.DEVNULL, env=env)
     process = time.perf_counter() - start
     loop = json.loads((out / f"{name}.summary.json").read_text())["wall_s"]
-    return process, loop
+    return process, loop, cpu_seconds_of_children() - cpu
 
 
 def main(argv=None):
@@ -75,15 +82,14 @@ def main(argv=None):
                 results.append(timed_run(command, out, name, env))
 
     print(f"{name}: {args.steps} steps, {args.threads} threads, {args.repeat} runs each, alternating; {cpu_name()}")
-    print(f"{'':>10} {'time loop [s]':>14} {'process [s]':>12}")
+    print(f"{'':>10} {'time loop [s]':>14} {'process [s]':>12} {'process CPU [s]':>16}")
     medians = {}
     for side, results in (("command", cli), ("python", python)):
-        medians[side] = (statistics.median(r[1] for r in results), statistics.median(r[0] for r in results))
-        print(f"{side:>10} {medians[side][0]:14.3f} {medians[side][1]:12.3f}   "
+        medians[side] = [statistics.median(r[i] for r in results) for i in (1, 0, 2)]
+        print(f"{side:>10} {medians[side][0]:14.3f} {medians[side][1]:12.3f} {medians[side][2]:16.3f}   "
               f"(loop per run: {' '.join(f'{r[1]:.3f}' for r in results)})")
-    loop = medians["python"][0] / medians["command"][0]
-    process = medians["python"][1] / medians["command"][1]
-    print(f"{'ratio':>10} {loop:14.3f} {process:12.3f}   (python / command, medians)")
+    ratios = [p / c for p, c in zip(medians["python"], medians["command"])]
+    print(f"{'ratio':>10} {ratios[0]:14.3f} {ratios[1]:12.3f} {ratios[2]:16.3f}   (python / command, medians)")
 
 
 if __name__ == "__main__":
