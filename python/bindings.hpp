@@ -12,11 +12,12 @@ namespace coro::python {
 
 namespace py = pybind11;
 
-/// corocontact.InputWarning (a UserWarning): what `corocontact` prints as "warning: ...".
-py::handle input_warning();
-/// Gives each of `warnings` to Python's warnings module as an InputWarning.
+/// Warning categories (UserWarning): what `corocontact` prints as "warning: ..." about its input
+/// (InputWarning) and about its output folder (OutputWarning).
+enum class WarningKind { INPUT, OUTPUT };
+/// Gives each of `warnings` to Python's warnings module.
 /// @throws py::error_already_set when a warnings filter turns them into errors
-void warn(const std::vector<std::string>& warnings);
+void warn(const std::vector<std::string>& warnings, WarningKind kind = WarningKind::INPUT);
 
 /// Contact rows as the dict of numpy arrays that Simulation.contacts and detect() return:
 /// body, vertex, other, depth (the columns of `corocontact detect --csv`), normal, body_index,

@@ -1,14 +1,18 @@
 #include "case_run.hpp"
 
+#include <corocontact/core/atomic_file.hpp>
 #include <corocontact/core/error.hpp>
 #include <corocontact/core/tet_mesh.hpp>
 #include <corocontact/io/case_reader.hpp>
+#include <corocontact/io/run_files.hpp>
 #include <corocontact/io/scene_output.hpp>
+#include <corocontact/sim/run_notes.hpp>
 
 #include <sys/resource.h>
 
 #include <chrono>
 #include <cmath>
+#include <sstream>
 
 namespace coro::python {
 
@@ -63,6 +67,14 @@ CaseRun::CaseRun(const std::filesystem::path& case_file, std::optional<Index> th
         m_spec.simulation.output_dir = output_dir;
     m_loaded = load_scene(m_spec);
     m_simulation = std::make_unique<Simulation>(m_loaded.scene, m_spec);
+    // What `corocontact run` tells after loading (tools/corocontact.cpp).
+    m_load_warnings = m_loaded.warnings;
+    if (const auto note = contact_not_applied_note(m_spec))
+        m_load_warnings.push_back(*note);
+    if (!m_spec.contact.enabled && !m_spec.obstacles.empty())
+        m_load_warnings.push_back(m_spec.obstacles.front().location +
+                                  ": the obstacles have no effect, because contact.enabled is false (set enabled = "
+                                  "true in [contact])");
     m_setup_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - setup_start).count();
     m_simulation->start(); // counted in the summary's wall_s, as in Simulation::run
 }
@@ -104,10 +116,29 @@ std::string CaseRun::summary_json() const
     return coro::summary_json(summary(), context);
 }
 
-std::filesystem::path CaseRun::write_summary() const
+VtkSeriesWriter& CaseRun::writer()
 {
-    const auto path = m_spec.simulation.output_dir / (m_spec.simulation.name + ".summary.json");
-    std::filesystem::create_directories(m_spec.simulation.output_dir);
+    if (m_writer)
+        return *m_writer;
+    const std::filesystem::path& dir = m_spec.simulation.output_dir;
+    const std::string& name = m_spec.simulation.name;
+    m_lock = std::make_unique<OutputLock>(dir, "python3: corocontact.Simulation('" + m_spec.file.string() + "')");
+    if (!m_lock->stale_owner().empty())
+        m_output_notes.push_back(m_lock->path().string() + ": taking over the lock of a run that ended without " +
+                                 "removing it (" + m_lock->stale_owner() + ")");
+    const RemovedFiles removed = remove_earlier_run(dir, name, -1, false);
+    if (removed.files > 0)
+        m_output_notes.push_back("removed " + std::to_string(removed.files) + " files (" +
+                                 std::to_string(removed.frames) + " frames) of an earlier run of " + name + " from " +
+                                 dir.string());
+    m_writer = std::make_unique<VtkSeriesWriter>(dir, name);
+    return *m_writer;
+}
+
+std::filesystem::path CaseRun::write_summary()
+{
+    writer();
+    const auto path = summary_path(m_spec.simulation.output_dir, m_spec.simulation.name);
     write_file_atomically(path, summary_json());
     return path;
 }
@@ -118,9 +149,7 @@ std::filesystem::path CaseRun::write_frame()
     CORO_CHECK(step != m_last_frame, InputError,
                "write_frame(): the frame of step " << step << " is already written (step first)");
     const auto start = std::chrono::steady_clock::now();
-    if (!m_writer)
-        m_writer = std::make_unique<VtkSeriesWriter>(m_spec.simulation.output_dir, m_spec.simulation.name);
-    m_writer->write_frame(step, time(), scene_frame(scene()));
+    writer().write_frame(step, time(), scene_frame(scene()));
     m_last_frame = step;
     m_output_s += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     return m_writer->pvd_path();
@@ -170,7 +199,7 @@ void CaseRun::set_fixed(Index b, const std::vector<char>& fixed)
     m_simulation->update_contact_response();
 }
 
-Index CaseRun::set_loads(Index b, CRef<Positions> loads)
+void CaseRun::set_loads(Index b, CRef<Positions> loads)
 {
     Body& target = body(b);
     const Index bad = first_non_finite_row(loads);
@@ -178,10 +207,23 @@ Index CaseRun::set_loads(Index b, CRef<Positions> loads)
                "body '" << target.name() << "': loads[" << bad << "] = " << format_row(loads.row(bad))
                         << ": expected finite numbers");
     target.load_forces() = target.from_input_order(loads);
-    Index loaded_fixed = 0;
-    for (Index v = 0; v < target.num_vertices(); ++v)
-        loaded_fixed += target.fixed()[static_cast<std::size_t>(v)] && !loads.row(target.input_node(v)).isZero(0.0);
-    return loaded_fixed;
+}
+
+std::optional<std::string> CaseRun::loads_on_fixed_nodes(Index b) const
+{
+    const Body& target = scene().bodies[static_cast<std::size_t>(b)];
+    Vec3 lost = Vec3::Zero(), total = Vec3::Zero();
+    for (Index v = 0; v < target.num_vertices(); ++v) {
+        total += target.load_forces().segment<3>(3 * v);
+        if (target.fixed()[static_cast<std::size_t>(v)] != 0)
+            lost += target.load_forces().segment<3>(3 * v);
+    }
+    if (!(lost.stableNorm() > 1e-12 * total.stableNorm()))
+        return std::nullopt;
+    std::ostringstream message;
+    message << "body '" << target.name() << "': " << lost.stableNorm() << " of the " << total.stableNorm()
+            << " N of its loads fall on fixed nodes and have no effect";
+    return message.str();
 }
 
 void CaseRun::set_gravity(const Vec3& gravity)
@@ -191,16 +233,19 @@ void CaseRun::set_gravity(const Vec3& gravity)
     m_spec.simulation.gravity = gravity;
 }
 
-void CaseRun::check_contact_enabled(const char* key) const
+void CaseRun::check_contact_applies(const char* key) const
 {
     CORO_CHECK(m_spec.contact.enabled, InputError,
                key << ": the case has no contact (expected [contact] enabled = true in " << m_spec.file.string()
                    << ")");
+    CORO_CHECK(contact_applies(m_spec), InputError,
+               key << ": contact is not applied in static analysis (expected analysis = \"dynamic\" in "
+                   << m_spec.file.string() << ")");
 }
 
 void CaseRun::set_contact_stiffness(double stiffness)
 {
-    check_contact_enabled("contact.stiffness");
+    check_contact_applies("contact.stiffness");
     check_number(stiffness, true, "contact.stiffness");
     m_spec.contact.stiffness = stiffness;
     m_simulation->update_contact_response();
@@ -208,7 +253,7 @@ void CaseRun::set_contact_stiffness(double stiffness)
 
 void CaseRun::set_contact_damping(double damping)
 {
-    check_contact_enabled("contact.damping");
+    check_contact_applies("contact.damping");
     check_number(damping, false, "contact.damping");
     m_spec.contact.damping = damping;
     m_simulation->update_contact_response();
@@ -216,7 +261,7 @@ void CaseRun::set_contact_damping(double damping)
 
 void CaseRun::set_contact_friction(double friction)
 {
-    check_contact_enabled("contact.friction");
+    check_contact_applies("contact.friction");
     check_number(friction, false, "contact.friction");
     m_spec.contact.friction = friction;
     m_simulation->update_contact_response();

@@ -3,6 +3,7 @@
 // stepped by the caller, with the inputs a script may change between steps. No Python here:
 // simulation_binding.cpp turns arrays and errors into Python's.
 
+#include <corocontact/io/output_lock.hpp>
 #include <corocontact/io/scene_loader.hpp>
 #include <corocontact/io/vtk_series.hpp>
 #include <corocontact/sim/case_spec.hpp>
@@ -14,6 +15,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace coro::python {
@@ -36,8 +38,11 @@ public:
 
     const CaseSpec& spec() const { return m_spec; }
     const Scene& scene() const { return m_loaded.scene; }
-    /// What `corocontact run` prints as "warning: ..." while loading.
-    const std::vector<std::string>& load_warnings() const { return m_loaded.warnings; }
+    /// What `corocontact run` prints as "warning: ..." (or as a note) while loading.
+    const std::vector<std::string>& load_warnings() const { return m_load_warnings; }
+    /// What the output calls had to say since the last call (a stale lock taken over, files of
+    /// an earlier run removed), for the caller to pass on; cleared.
+    std::vector<std::string> take_output_notes() { return std::exchange(m_output_notes, {}); }
     /// Worker threads TBB uses now (what summary.json reports).
     Index threads() const;
 
@@ -54,12 +59,17 @@ public:
     /// The summary as OUT/NAME.summary.json holds it (io/scene_output.hpp summary_json).
     std::string summary_json() const;
     /// Writes summary_json() to OUT/NAME.summary.json; returns the path.
-    std::filesystem::path write_summary() const;
+    /// @throws OutputError as write_frame()
+    std::filesystem::path write_summary();
 
     /// Writes the current state as frame `steps_done()` of the series OUT/NAME.pvd, exactly as
-    /// `corocontact run` writes it (io/scene_output.hpp scene_frame, io/vtk_series.hpp).
+    /// `corocontact run` writes it (io/scene_output.hpp scene_frame, io/vtk_series.hpp). The
+    /// first call of write_frame() or write_summary() takes the folder's lock, held as long as
+    /// this object lives, and removes what an earlier run of the series left there, as
+    /// `corocontact run` does before it writes.
     /// @return the .pvd path
-    /// @throws InputError if this step's frame is already written, or a file cannot be written
+    /// @throws InputError if this step's frame is already written
+    /// @throws OutputError if another run holds the folder, or a file cannot be written
     std::filesystem::path write_frame();
     /// OUT/NAME.pvd.
     std::filesystem::path series_path() const;
@@ -73,8 +83,10 @@ public:
     /// @param[in] fixed  #V flags, input node order; nodes in no tet must stay fixed
     void set_fixed(Index body, const std::vector<char>& fixed);
     /// @param[in] loads  #V×3 constant nodal forces [N], input node order
-    /// @return the number of fixed nodes given a nonzero load (it has no effect on them)
-    Index set_loads(Index body, CRef<Positions> loads);
+    void set_loads(Index body, CRef<Positions> loads);
+    /// The warning the scene loader gives for a body whose loads fall on fixed nodes (there they
+    /// have no effect), or none.
+    std::optional<std::string> loads_on_fixed_nodes(Index body) const;
     /// @param[in] gravity  [m/s²]
     void set_gravity(const Vec3& gravity);
     /// [contact] stiffness (> 0), damping (≥ 0), friction (≥ 0).
@@ -85,13 +97,18 @@ public:
 
 private:
     Body& body(Index b);
-    void check_contact_enabled(const char* key) const;
+    void check_contact_applies(const char* key) const;
+    /// The lock on the output folder and the series writer, made at the first write.
+    VtkSeriesWriter& writer();
 
     std::unique_ptr<tbb::global_control> m_threads; // first: held while loading too
     CaseSpec m_spec;                                 // read by m_simulation
     LoadedScene m_loaded;                            // stepped by m_simulation
     std::unique_ptr<Simulation> m_simulation;
-    std::unique_ptr<VtkSeriesWriter> m_writer;       // made by the first write_frame()
+    std::vector<std::string> m_load_warnings;
+    std::unique_ptr<OutputLock> m_lock;              // taken by the first write
+    std::unique_ptr<VtkSeriesWriter> m_writer;       // made by the first write
+    std::vector<std::string> m_output_notes;
     Index m_last_frame = -1;                         // step of the last frame written
     double m_output_s = 0.0;                         // time spent in write_frame() [s]
     double m_setup_s = 0.0;                          // reading and loading the case [s]

@@ -9,16 +9,25 @@
 namespace coro::python {
 
 namespace {
-// Made once at import and never released: the module keeps it for the interpreter's lifetime.
-py::handle g_input_warning;
+// Made once at import and never released: the module keeps them for the interpreter's lifetime.
+py::handle g_input_warning, g_output_warning;
+
+py::handle new_warning(py::module_& m, const char* name, const char* doc)
+{
+    const std::string full = std::string("corocontact.") + name;
+    const py::handle category(PyErr_NewExceptionWithDoc(full.c_str(), doc, PyExc_UserWarning, nullptr));
+    if (!category)
+        throw py::error_already_set();
+    m.attr(name) = category;
+    return category;
+}
 } // namespace
 
-py::handle input_warning() { return g_input_warning; }
-
-void warn(const std::vector<std::string>& warnings)
+void warn(const std::vector<std::string>& warnings, WarningKind kind)
 {
+    const py::handle category = kind == WarningKind::INPUT ? g_input_warning : g_output_warning;
     for (const std::string& warning : warnings)
-        if (PyErr_WarnEx(g_input_warning.ptr(), warning.c_str(), 1) != 0)
+        if (PyErr_WarnEx(category.ptr(), warning.c_str(), 1) != 0)
             throw py::error_already_set();
 }
 
@@ -30,15 +39,15 @@ PYBIND11_MODULE(corocontact, m)
     using namespace coro::python;
     m.doc() = "corocontact: co-rotational FEM bodies in contact, from Python (docs/python.md)";
     m.attr("__version__") = CORO_VERSION;
-    // Bad input (exit code 2 of the command) and divergence (exit code 3), with the same messages.
+    // Bad input (exit code 2 of the command), divergence (3) and output that cannot be written
+    // (4), with the command's messages.
     py::register_exception<coro::InputError>(m, "InputError", PyExc_ValueError);
     py::register_exception<coro::NumericalError>(m, "NumericalError", PyExc_RuntimeError);
-    g_input_warning = py::handle(PyErr_NewExceptionWithDoc("corocontact.InputWarning",
-                                  "What the corocontact command prints as 'warning: ...' while loading input.",
-                                  PyExc_UserWarning, nullptr));
-    if (!g_input_warning)
-        throw py::error_already_set();
-    m.attr("InputWarning") = g_input_warning;
+    py::register_exception<coro::OutputError>(m, "OutputError", PyExc_OSError);
+    g_input_warning = new_warning(m, "InputWarning", "What the corocontact command warns about its input.");
+    g_output_warning = new_warning(m, "OutputWarning",
+                                   "What the corocontact command tells about its output folder (a stale lock "
+                                   "taken over, files of an earlier run removed).");
     bind_simulation(m);
     bind_detection(m);
 }

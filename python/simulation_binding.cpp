@@ -125,6 +125,12 @@ struct SimulationObject {
     py::tuple bodies;
 };
 
+void warn_about_loads_on_fixed_nodes(BodyView& view)
+{
+    if (const auto warning = view.run().loads_on_fixed_nodes(view.index()))
+        warn({*warning});
+}
+
 const char* analysis_name(Analysis analysis) { return analysis == Analysis::STATIC ? "static" : "dynamic"; }
 
 py::tuple make_bodies(const std::shared_ptr<SharedRun>& run)
@@ -181,6 +187,7 @@ every node) to change them; fixed nodes must get 0.)doc")
             },
             [](BodyView& self, const py::handle& value) {
                 self.run().set_fixed(self.index(), flags_from(value, self.body().num_vertices(), self.what("fixed")));
+                warn_about_loads_on_fixed_nodes(self);
             },
             R"doc(N bool, True for a node held in place (a copy). Assign an N-array to change it: nodes
 fixed from now on stay where they are (velocity 0); released ones move from the next step.)doc")
@@ -188,11 +195,8 @@ fixed from now on stay where they are (velocity 0); released ones move from the 
             "loads",
             [](const BodyView& self) { return to_numpy(self.body().to_input_order(self.body().load_forces())); },
             [](BodyView& self, const py::handle& value) {
-                const Index on_fixed =
-                    self.run().set_loads(self.index(), rows_from(value, self.body().num_vertices(), self.what("loads")));
-                if (on_fixed > 0)
-                    warn({self.what("loads") + " on " + std::to_string(on_fixed) +
-                          " fixed nodes have no effect (fixed nodes do not move)"});
+                self.run().set_loads(self.index(), rows_from(value, self.body().num_vertices(), self.what("loads")));
+                warn_about_loads_on_fixed_nodes(self);
             },
             R"doc(constant external node forces, N×3 float64 [N] (a copy; the case's [[body.load]] boxes
 split over their nodes). Assign an N×3 array to change them. Gravity is separate
@@ -281,15 +285,30 @@ in its surface file for an embedded surface), depth [m], normal (outward unit no
 other surface, K×3), body_index and other_index (into names: the bodies, then mesh
 obstacles obstacle<k>, then planes plane<k>). Copies.)doc")
         .def(
-            "write_frame", [](SimulationObject& self) { return self.run->get().write_frame(); },
+            "write_frame",
+            [](SimulationObject& self) {
+                CaseRun& run = self.run->get();
+                const std::filesystem::path pvd = run.write_frame();
+                warn(run.take_output_notes(), WarningKind::OUTPUT);
+                return pvd;
+            },
             R"doc(Writes the current state as frame `steps_done` of OUT/NAME.pvd, exactly as `corocontact
 run` writes its frames (it writes frame 0, every output_every-th step and the last). Returns
-the .pvd path.)doc")
+the .pvd path. The first write takes the output folder's lock (OUT/corocontact.lock, held
+while this object lives) and removes what an earlier run of the series left there, as
+`corocontact run` does; OutputError if another run holds the folder or a file cannot be
+written.)doc")
         .def(
             "summary", [](SimulationObject& self) { return py::module_::import("json").attr("loads")(self.run->get().summary_json()); },
             "the counters so far as a dict, with the keys of OUT/NAME.summary.json")
         .def(
-            "write_summary", [](SimulationObject& self) { return self.run->get().write_summary(); },
+            "write_summary",
+            [](SimulationObject& self) {
+                CaseRun& run = self.run->get();
+                const std::filesystem::path path = run.write_summary();
+                warn(run.take_output_notes(), WarningKind::OUTPUT);
+                return path;
+            },
             "writes OUT/NAME.summary.json as `corocontact run` does at its end; returns its path")
         .def_property(
             "gravity", [](SimulationObject& self) { return to_numpy(VecX(self.run->get().spec().simulation.gravity)); },

@@ -3,6 +3,7 @@
 #include <corocontact/config.hpp>
 #include <corocontact/core/error.hpp>
 #include <corocontact/sim/divergence_check.hpp>
+#include <corocontact/sim/run_notes.hpp>
 #include <corocontact/sim/scene_contact.hpp>
 #include <corocontact/sim/static_solver.hpp>
 
@@ -72,7 +73,7 @@ void add_solve(const PcgResult& result, RunSummary& summary)
 Simulation::Simulation(Scene& scene, const CaseSpec& spec)
     : m_scene(scene), m_spec(spec), m_system(scene.bodies), m_divergence(scene.bodies)
 {
-    if (!spec.contact.enabled)
+    if (!contact_applies(spec))
         return;
     m_scene.surfaces = make_scene_surfaces(m_scene);
     if (spec.contact.cross_check == CrossCheck::EMBREE) {
@@ -89,7 +90,7 @@ Simulation::~Simulation() = default;
 
 void Simulation::detect(RunSummary& summary)
 {
-    if (!m_spec.contact.enabled)
+    if (!contact_applies(m_spec))
         return;
     ScopedTimer timer(summary.phases.contact);
     update_contact_surfaces(m_scene.bodies, m_scene.surfaces);
@@ -124,7 +125,7 @@ void Simulation::detect(RunSummary& summary)
 
 void Simulation::update_contact_response()
 {
-    if (!m_spec.contact.enabled)
+    if (!contact_applies(m_spec))
         return;
     m_response.compute(m_scene.bodies, m_scene.surfaces, m_scene.contacts, m_spec.contact, m_spec.simulation.dt,
                        m_system.matrix());
@@ -164,10 +165,13 @@ void Simulation::static_step(Index load_step)
                 throw;
             CORO_THROW(NumericalError, "body '" << body.name() << "': " << what);
         }
-        ++m_totals.solves;
+        m_totals.solves += result.solves;
         m_totals.cg_iterations_mean += result.cg_iterations;
-        m_totals.cg_residual_mean += result.residual;
+        m_totals.cg_residual_mean += result.cg_residual_sum;
+        m_totals.solves_not_converged += result.solves_not_converged;
         m_totals.static_not_converged += result.converged ? 0 : 1;
+        m_totals.static_iterations_mean += result.iterations;
+        m_totals.static_iterations_max = std::max(m_totals.static_iterations_max, result.iterations);
     }
 }
 
@@ -228,6 +232,8 @@ RunSummary Simulation::summary() const
     }
     if (summary.detections > 0)
         summary.contacts_mean /= summary.detections;
+    if (m_spec.simulation.analysis == Analysis::STATIC && summary.steps > 0)
+        summary.static_iterations_mean /= static_cast<double>(summary.steps) * static_cast<double>(m_scene.bodies.size());
     return summary;
 }
 

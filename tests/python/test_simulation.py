@@ -42,20 +42,42 @@ def test_frames_stepped_from_python_equal_the_command_bit_for_bit(cli, tmp_path,
     sim = corocontact.Simulation(case, threads=1, output_dir=tmp_path / "python")
     step_like_the_command(sim, steps)
     sim.write_summary()
+    keys, name = sim.summary().keys(), sim.name
+    assert (tmp_path / "python" / "corocontact.lock").exists()
+    del sim  # lets go of the output folder's lock
 
     cli_files = series_files(tmp_path / "cli")
     assert cli_files == series_files(tmp_path / "python")
     assert len(cli_files) > 3
-    for name in cli_files:
-        assert (tmp_path / "cli" / name).read_bytes() == (tmp_path / "python" / name).read_bytes(), name
+    for file in cli_files:
+        assert (tmp_path / "cli" / file).read_bytes() == (tmp_path / "python" / file).read_bytes(), file
     # The summaries: the same keys, the same counts and means; only timings and threads differ.
-    from_cli = json.loads((tmp_path / "cli" / f"{sim.name}.summary.json").read_text())
-    from_python = json.loads((tmp_path / "python" / f"{sim.name}.summary.json").read_text())
-    assert sim.summary().keys() == from_cli.keys() == from_python.keys()
+    from_cli = json.loads((tmp_path / "cli" / f"{name}.summary.json").read_text())
+    from_python = json.loads((tmp_path / "python" / f"{name}.summary.json").read_text())
+    assert keys == from_cli.keys() == from_python.keys()
     timings = {"wall_s", "steps_per_s", "setup_s", "phases", "peak_rss_mb", "threads"}
     assert {k: v for k, v in from_python.items() if k not in timings} == \
         {k: v for k, v in from_cli.items() if k not in timings}
     assert from_python["steps"] == steps and from_python["threads"] == 1 and from_cli["threads"] == 2
+
+
+def test_one_run_per_output_folder_and_an_earlier_run_removed(cli, tmp_path):
+    case = CASES / "two_spheres" / "two_spheres.toml"
+    cli("run", case, "--steps", 10, "--out", tmp_path, "--quiet", check_exit=0)  # frames 0, 5, 10
+    first = corocontact.Simulation(case, output_dir=tmp_path)
+    with pytest.warns(corocontact.OutputWarning, match=r"removed \d+ files \(3 frames\) of an earlier run"):
+        first.write_frame()
+    assert not (tmp_path / "two_spheres_000010.vtm").exists()
+    # The folder is taken: by the command's rules, with the command's message.
+    refused = cli("run", case, "--steps", 10, "--out", tmp_path, "--quiet", check_exit=4)
+    assert "corocontact.Simulation(" in refused.stderr
+    second = corocontact.Simulation(case, output_dir=tmp_path)
+    with pytest.raises(corocontact.OutputError) as raised:
+        second.write_frame()
+    assert isinstance(raised.value, OSError) and "corocontact.Simulation(" in str(raised.value)
+    del first
+    with pytest.warns(corocontact.OutputWarning, match=r"removed \d+ files \(1 frames\)"):
+        second.write_frame()  # the first one's frame is an earlier run's now
 
 
 def read_vtu(path):
@@ -139,7 +161,8 @@ def test_velocities_gravity_loads_and_fixed_nodes_set_from_python_act_as_in_the_
                             "[[body.fixed]]\nmin = [-1.0, -1.0, -1.0]\nmax = [1.0, 1.0, -0.05]\n"
                             "[[body.load]]\nmin = [-1.0, 0.09, -1.0]\nmax = [1.0, 1.0, 1.0]\nforce = [3.0, -2.0, 1.0]",
         "gravity = [0.0, -9.81, 0.0]": "gravity = [1.0, -5.0, 0.5]"})
-    in_file = corocontact.Simulation(case)
+    with pytest.warns(corocontact.InputWarning, match=r"N of its \[\[body.load\]\] forces fall on fixed nodes"):
+        in_file = corocontact.Simulation(case)
     from_python = corocontact.Simulation(tilted_plane_case(tmp_path, SUNK))
     assert len(from_python.contacts["depth"]) > 0
     box = from_python.body("box")
@@ -154,7 +177,7 @@ def test_velocities_gravity_loads_and_fixed_nodes_set_from_python_act_as_in_the_
     box.velocities = velocities
     loads = np.zeros((box.num_vertices, 3))
     loads[loaded] = np.array([3.0, -2.0, 1.0]) / loaded.sum()
-    with pytest.warns(corocontact.InputWarning, match=r"body 'box': loads on \d fixed nodes have no effect"):
+    with pytest.warns(corocontact.InputWarning, match=r"body 'box': [\d.]+ of the [\d.]+ N of its loads fall on fixed"):
         box.loads = loads
     assert np.array_equal(box.fixed, in_file.body("box").fixed)
     assert np.array_equal(box.loads, in_file.body("box").loads)

@@ -47,6 +47,8 @@ struct RunSummary {
     Index solves = 0;              ///< PCG solves done
     Index solves_not_converged = 0; ///< solves that stopped at the iteration cap
     Index static_not_converged = 0; ///< static load steps that missed static_tolerance
+    double static_iterations_mean = 0.0; ///< static: Newton iterations per load step and body
+    Index static_iterations_max = 0;     ///< static: the most Newton iterations of a load step
     double max_contact_depth = 0.0;  ///< deepest penetration seen by any detection [m]
     double contacts_mean = 0.0;      ///< inside vertices per detection
     Index detections = 0;            ///< detection passes (initial state and every step)
@@ -115,7 +117,8 @@ public:
     /// Recomputes the contact response of the current state (the forces and coupling blocks the
     /// next step uses) from the current velocities, fixed nodes and contact settings: for a
     /// caller that changed them between steps. Detection is not repeated (positions have not
-    /// moved); counters are not changed. Does nothing without contact.
+    /// moved); counters are not changed. Does nothing where contact does not apply
+    /// (run_notes.hpp contact_applies).
     void update_contact_response();
 
     /// Steps done, those before a restart included.
