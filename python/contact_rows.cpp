@@ -43,6 +43,17 @@ void check_triangles(const MeshInput& mesh, const std::string& source)
     CORO_CHECK(mesh.faces.rows() > 0, InputError, source << ": no faces, expected at least one triangle");
 }
 
+/// Detection as `corocontact detect` does it: the first `num_bodies` surfaces against each other
+/// and the obstacle surfaces, then against the planes.
+std::vector<ContactPoint> detect_all(const std::vector<ContactSurface>& surfaces, Index num_bodies,
+                                     const std::vector<PlaneObstacle>& planes, const ContactSettings& contact)
+{
+    std::vector<ContactPoint> points = detect_contacts(surfaces, detection_settings(contact));
+    const std::vector<ContactPoint> on_planes = detect_plane_contacts(surfaces, num_bodies, planes);
+    points.insert(points.end(), on_planes.begin(), on_planes.end());
+    return points;
+}
+
 } // namespace
 
 ContactRows contact_rows(const std::vector<ContactSurface>& surfaces, Index num_planes,
@@ -75,15 +86,6 @@ ContactRows contact_rows(const std::vector<ContactSurface>& surfaces, Index num_
         rows.normal.row(r++) = points[i].normal.transpose();
     }
     return rows;
-}
-
-std::vector<ContactPoint> detect_all(const std::vector<ContactSurface>& surfaces, Index num_bodies,
-                                     const std::vector<PlaneObstacle>& planes, const ContactSettings& contact)
-{
-    std::vector<ContactPoint> points = detect_contacts(surfaces, detection_settings(contact));
-    const std::vector<ContactPoint> on_planes = detect_plane_contacts(surfaces, num_bodies, planes);
-    points.insert(points.end(), on_planes.begin(), on_planes.end());
-    return points;
 }
 
 ContactRows detect_case(const std::filesystem::path& case_file, const std::string& mode,

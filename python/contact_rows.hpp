@@ -35,11 +35,6 @@ struct ContactRows {
 ContactRows contact_rows(const std::vector<ContactSurface>& surfaces, Index num_planes,
                          const std::vector<ContactPoint>& points);
 
-/// Detection on a scene's initial state, as `corocontact detect` does it: the first
-/// `num_bodies` surfaces against each other and the obstacle surfaces, then against the planes.
-std::vector<ContactPoint> detect_all(const std::vector<ContactSurface>& surfaces, Index num_bodies,
-                                     const std::vector<PlaneObstacle>& planes, const ContactSettings& contact);
-
 /// `corocontact detect CASE --mode MODE --csv`, as rows.
 /// @param[in] mode  "exact" or "paper"
 /// @param[out] warnings  what `detect` prints as "warning: ..." while loading
