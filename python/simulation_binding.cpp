@@ -337,7 +337,13 @@ written.)doc")
                 return s.analysis == Analysis::STATIC ? s.load_steps : s.steps;
             },
             "the step `corocontact run` stops at: simulation.steps (dynamic) or load_steps (static)")
-        .def_property_readonly("output_every", [](SimulationObject& self) { return self.run->get().spec().simulation.output_every; })
+        .def_property_readonly(
+            "output_every",
+            [](SimulationObject& self) {
+                const SimulationSettings& s = self.run->get().spec().simulation;
+                return s.analysis == Analysis::STATIC ? 1 : s.output_every;
+            },
+            "`corocontact run` writes every output_every-th step: simulation.output_every (dynamic), 1 (static)")
         .def_property_readonly("output_dir", [](SimulationObject& self) { return self.run->get().spec().simulation.output_dir; })
         .def_property_readonly("series_path", [](SimulationObject& self) { return self.run->get().series_path(); },
                                "OUT/NAME.pvd, the series write_frame() writes")
