@@ -123,6 +123,15 @@ void Simulation::detect(RunSummary& summary)
 #endif
 }
 
+void Simulation::update_contact_response()
+{
+    if (!contact_applies(m_spec))
+        return;
+    m_response.compute(m_scene.bodies, m_scene.surfaces, m_scene.contacts, m_spec.contact, m_spec.simulation.dt,
+                       m_system.matrix());
+    m_scene.contact_forces = m_response.forces();
+}
+
 void Simulation::dynamic_step()
 {
     static const std::vector<VecX> no_forces;
