@@ -254,10 +254,10 @@ void BM_PipelineWithoutNarrowPhase(benchmark::State& state)
             answers[{pair.other, p.x(), p.y(), p.z()}] = inside_test(
                 surfaces[static_cast<std::size_t>(pair.other)], p, DetectionMode::EXACT, {}, AxisRayTolerances{});
         }
+    CustomNarrowPhase lookup;
+    lookup.inside = [&](Index other, const Vec3& p) { return answers.at({other, p.x(), p.y(), p.z()}); };
     for (auto _ : state)
-        benchmark::DoNotOptimize(detect_contacts(
-            surfaces, [&](Index other, const Vec3& p) { return answers.at({other, p.x(), p.y(), p.z()}); },
-            nullptr));
+        benchmark::DoNotOptimize(detect_contacts(surfaces, lookup, true));
     label(state, sc, "table lookup instead of inside tests");
 }
 
@@ -279,9 +279,10 @@ void BM_AxisRayDetect(benchmark::State& state)
     const Scene& sc = scene(static_cast<Index>(state.range(0)));
     const std::vector<ContactSurface>& surfaces = sc.surfaces[0];
     DetectionStats stats;
-    detect_contacts(surfaces, DetectionSettings{}, &stats);
+    DetectionScratch scratch;
+    detect_contacts(surfaces, DetectionSettings{}, scratch, &stats);
     for (auto _ : state)
-        benchmark::DoNotOptimize(detect_contacts(surfaces, DetectionSettings{}));
+        benchmark::DoNotOptimize(detect_contacts(surfaces, DetectionSettings{}, scratch));
     state.counters["queries"] = static_cast<double>(stats.candidate_vertices);
     state.counters["inside"] = static_cast<double>(stats.inside);
     state.counters["vertex_queries/s"] = benchmark::Counter(
@@ -300,10 +301,11 @@ void BM_AxisRayFrame(benchmark::State& state)
 {
     const Scene& sc = scene(static_cast<Index>(state.range(0)));
     std::vector<ContactSurface> surfaces = sc.surfaces[0];
+    DetectionScratch scratch;
     int frame = 0;
     for (auto _ : state) {
         next_frame(sc, frame, surfaces);
-        benchmark::DoNotOptimize(detect_contacts(surfaces, DetectionSettings{}));
+        benchmark::DoNotOptimize(detect_contacts(surfaces, DetectionSettings{}, scratch));
     }
     label(state, sc, "axis-ray exact");
 }
@@ -315,10 +317,11 @@ void BM_AxisRayFrameInsideOnly(benchmark::State& state)
     std::vector<ContactSurface> surfaces = sc.surfaces[0];
     DetectionSettings settings;
     settings.contact_data = false;
+    DetectionScratch scratch;
     int frame = 0;
     for (auto _ : state) {
         next_frame(sc, frame, surfaces);
-        benchmark::DoNotOptimize(detect_contacts(surfaces, settings));
+        benchmark::DoNotOptimize(detect_contacts(surfaces, settings, scratch));
     }
     label(state, sc, "axis-ray exact, inside only");
 }
@@ -368,6 +371,7 @@ void summary(Index resolution, int frames, std::size_t threads)
                                   "embree, depth by our tree", "embree, inside only"};
     std::vector<PathTimes> t(N_PATHS);
     std::vector<std::vector<ContactSurface>> surfaces(N_PATHS, sc.surfaces[0]);
+    std::vector<DetectionScratch> scratches(N_PATHS); // each path's, kept from frame to frame as in a time loop
     detail::EmbreeSceneSet scenes(sc.surfaces[0], detail::EmbreeBuild::REFIT);
     std::vector<double> embree_update;
     const int brute_frames = std::min(frames, resolution > 16 ? 4 : 16);
@@ -395,16 +399,14 @@ void summary(Index resolution, int frames, std::size_t threads)
                 }));
             } else if (p == EMBREE_TREE_DEPTH) { // Embree's inside tests, our tree's depth searches
                 embree_update.push_back(seconds([&] { scenes.update(s); }));
-                pt.detect.push_back(seconds([&] {
-                    points = detect_contacts(
-                        s,
-                        [&](Index other, const Vec3& x) {
-                            return scenes.inside_test(s[static_cast<std::size_t>(other)], other, x);
-                        },
-                        &stats, true);
-                }));
+                CustomNarrowPhase embree_inside;
+                embree_inside.inside = [&](Index other, const Vec3& x) {
+                    return scenes.inside_test(s[static_cast<std::size_t>(other)], other, x);
+                };
+                pt.detect.push_back(seconds([&] { points = detect_contacts(s, embree_inside, true, &stats); }));
             } else {
-                pt.detect.push_back(seconds([&] { points = detect_contacts(s, settings, &stats); }));
+                DetectionScratch& scratch = scratches[static_cast<std::size_t>(p)];
+                pt.detect.push_back(seconds([&] { points = detect_contacts(s, settings, scratch, &stats); }));
             }
             if (p == EXACT)
                 exact_points = points;

@@ -43,10 +43,10 @@ ContactResponse contact_response(const std::vector<Body>& bodies, const std::vec
         };
         if (contact.body < n_bodies)
             add_vertex(contact.body, contact.vertex, -1.0);
-        if (contact.other >= 0 && contact.other < n_bodies && contact.face >= 0) {
-            const ContactSurface& other = surfaces[static_cast<std::size_t>(contact.other)];
+        if (contact.other.is_surface() && contact.other.index < n_bodies && contact.face >= 0) {
+            const ContactSurface& other = surfaces[static_cast<std::size_t>(contact.other.index)];
             for (int i = 0; i < 3; ++i)
-                add_vertex(contact.other, other.faces(contact.face, i), contact.barycentric[i]);
+                add_vertex(contact.other.index, other.faces(contact.face, i), contact.barycentric[i]);
         }
         if (count == 0)
             continue; // two obstacles

@@ -113,6 +113,7 @@ private:
     struct EmbreeCheck;
     std::unique_ptr<EmbreeCheck> m_embree; // cross-check scenes, when asked for
     ContactResponse m_response;            // of the last detection, used by the next step
+    DetectionScratch m_detection;          // detect_contacts' working memory, kept from step to step
     DivergenceCheck m_divergence;          // run after every step
 };
 
