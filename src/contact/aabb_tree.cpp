@@ -208,38 +208,44 @@ void AabbTree::refit_node(const double* data, std::ptrdiff_t stride, Index n)
     // finite float of that sign, so no NaN reaches a node's union.
     const auto round_down = [&](F4 l) { return min(l - (abs(l) * ulp + tiny), largest); };
     const auto round_up = [&](F4 h) { return max(h + (abs(h) * ulp + tiny), lowest); };
-    // Lane k's box (x, y, z, unused) in one register each; the four are transposed into the
-    // node's rows at the end.
-    F4 lo[4], hi[4];
-    for (int k = 0; k < 4; ++k) {
+    // Lane k's box (x, y, z, unused) in one register each, the lanes unrolled so that the
+    // boxes stay in registers; the four are transposed into the node's rows at the end.
+    const auto lane = [&](int k, F4& lo, F4& hi) {
         if (k >= w.count) {
-            lo[k] = F4::splat(std::numeric_limits<float>::infinity());
-            hi[k] = F4::splat(-std::numeric_limits<float>::infinity());
-            continue;
+            lo = F4::splat(std::numeric_limits<float>::infinity());
+            hi = F4::splat(-std::numeric_limits<float>::infinity());
+            return;
         }
         const Index c = w.child[k];
         if (c >= 0) {
             const NodeBox& cb = m_node_boxes[static_cast<std::size_t>(c)];
-            lo[k] = F4::load(cb.lo);
-            hi[k] = F4::load(cb.hi);
-            continue;
+            lo = F4::load(cb.lo);
+            hi = F4::load(cb.hi);
+            return;
         }
         using detail::simd::load_point;
         const Index* fv = &m_slot_vertices[3 * static_cast<std::size_t>(-1 - c)];
         const auto a = load_point(data + stride * fv[0]), b = load_point(data + stride * fv[1]);
         const auto d = load_point(data + stride * fv[2]);
-        lo[k] = round_down(detail::simd::to_float(min(min(a, b), d)));
-        hi[k] = round_up(detail::simd::to_float(max(max(a, b), d)));
-    }
+        lo = round_down(detail::simd::to_float(min(min(a, b), d)));
+        hi = round_up(detail::simd::to_float(max(max(a, b), d)));
+    };
+    F4 lo0, lo1, lo2, lo3, hi0, hi1, hi2, hi3;
+    lane(0, lo0, hi0);
+    lane(1, lo1, hi1);
+    lane(2, lo2, hi2);
+    lane(3, lo3, hi3);
     NodeBox& nb = m_node_boxes[static_cast<std::size_t>(n)];
-    min(min(lo[0], lo[1]), min(lo[2], lo[3])).store(nb.lo);
-    max(max(hi[0], hi[1]), max(hi[2], hi[3])).store(nb.hi);
-    detail::simd::transpose(lo[0], lo[1], lo[2], lo[3]);
-    detail::simd::transpose(hi[0], hi[1], hi[2], hi[3]);
-    for (int j = 0; j < 3; ++j) {
-        lo[j].store(w.lo[j]);
-        hi[j].store(w.hi[j]);
-    }
+    min(min(lo0, lo1), min(lo2, lo3)).store(nb.lo);
+    max(max(hi0, hi1), max(hi2, hi3)).store(nb.hi);
+    detail::simd::transpose(lo0, lo1, lo2, lo3);
+    detail::simd::transpose(hi0, hi1, hi2, hi3);
+    lo0.store(w.lo[0]);
+    lo1.store(w.lo[1]);
+    lo2.store(w.lo[2]);
+    hi0.store(w.hi[0]);
+    hi1.store(w.hi[1]);
+    hi2.store(w.hi[2]);
 }
 
 void AabbTree::refit_range(const double* data, std::ptrdiff_t stride, Index first, Index last)

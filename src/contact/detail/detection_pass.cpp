@@ -5,6 +5,8 @@
 #include <corocontact/core/error.hpp>
 
 #include <algorithm>
+#include <map>
+#include <utility>
 
 namespace coro::detail {
 
@@ -62,18 +64,79 @@ DetectionPass::DetectionPass(const std::vector<ContactSurface>& surfaces, const 
     m_state.slots.resize(contact_data ? offsets.back() : 0);
     m_state.inside.assign(offsets.back(), 0);
     m_state.stats.clear();
+    if (contact_data && !(custom && custom->nearest)) {
+        // The last answers of the pairs of this detection (those of pairs apart now are dropped).
+        std::map<std::pair<Index, Index>, std::vector<Index>> kept;
+        m_last_face.resize(candidates.size());
+        for (std::size_t k = 0; k < candidates.size(); ++k) {
+            const std::pair<Index, Index> key{candidates[k].body, candidates[k].other};
+            std::vector<Index>& last = kept[key];
+            if (const auto old = m_state.last_face.find(key); old != m_state.last_face.end())
+                last.swap(old->second);
+            last.resize(static_cast<std::size_t>(surfaces[static_cast<std::size_t>(key.first)].vertices.rows()), -1);
+            m_last_face[k] = last.data();
+        }
+        m_state.last_face.swap(kept);
+    }
 }
 
-ContactPoint DetectionPass::contact_point(std::size_t k, std::size_t i, double distance_bound, Index hint_face) const
+template <class Start>
+void DetectionPass::contact_points(std::size_t k, Index first, Index count, const unsigned char* inside,
+                                   const Start& start)
 {
     const PairCandidates& pair = m_candidates[k];
-    const Index vertex = pair.vertices[i];
-    const Vec3 p = m_surfaces[static_cast<std::size_t>(pair.body)].vertices.row(vertex).transpose();
-    if (m_custom && m_custom->nearest) // the caller's search (e.g. Embree's point queries)
-        return make_point(m_surfaces, pair.body, vertex, pair.other, m_custom->nearest(pair.other, p, distance_bound));
+    const Positions& vertices = m_surfaces[static_cast<std::size_t>(pair.body)].vertices;
+    ContactPoint* slots = m_state.slots.data() + m_state.offsets[k] + static_cast<std::size_t>(first);
+    const auto point = [&](Index i) {
+        return Vec3(vertices.row(pair.vertices[static_cast<std::size_t>(first + i)]).transpose());
+    };
+    const auto vertex = [&](Index i) { return pair.vertices[static_cast<std::size_t>(first + i)]; };
+    if (m_custom && m_custom->nearest) { // the caller's search (e.g. Embree's point queries)
+        for (Index i = 0; i < count; ++i)
+            if (inside[i])
+                slots[i] = make_point(m_surfaces, pair.body, vertex(i), pair.other,
+                                      m_custom->nearest(pair.other, point(i), start(first + i).first));
+        return;
+    }
     const ContactSurface& other = m_surfaces[static_cast<std::size_t>(pair.other)];
     const NearestSearch search(other.tree, other.vertices, &m_state.planes[static_cast<std::size_t>(pair.other)]);
-    return make_point(m_surfaces, pair.body, vertex, pair.other, search.find(p, distance_bound, hint_face, &other.faces));
+    // The inside vertices in packets of neighbours (they come in spatial order), searched
+    // together. Each search starts from the vertex's answer of the last detection (its nearest
+    // face moves little from step to step), else from the answer of the same place in the
+    // previous packet (a neighbour), else from the face its inside test crossed. The answers do
+    // not depend on the starts, only the work does; within a detection the starts depend only on
+    // the block, not on the scheduling.
+    Index* last = m_last_face[k];
+    constexpr int PACKET = NearestSearch::PACKET;
+    Vec3 points[PACKET];
+    double bounds[PACKET];
+    Index hints[PACKET], previous[PACKET], at[PACKET];
+    std::fill(previous, previous + PACKET, Index{-1});
+    NearestPoint found[PACKET];
+    int n = 0;
+    const auto flush = [&] {
+        search.find_packet(points, n, bounds, hints, &other.faces, found);
+        for (int q = 0; q < n; ++q) {
+            slots[at[q]] = make_point(m_surfaces, pair.body, vertex(at[q]), pair.other, found[q]);
+            previous[q] = found[q].face;
+            last[vertex(at[q])] = found[q].face;
+        }
+        n = 0;
+    };
+    for (Index i = 0; i < count; ++i) {
+        if (!inside[i])
+            continue;
+        const auto [bound, crossing] = start(first + i);
+        points[n] = point(i);
+        bounds[n] = bound;
+        const Index v = vertex(i);
+        hints[n] = last[v] >= 0 ? last[v] : previous[n] >= 0 ? previous[n] : crossing;
+        at[n++] = i;
+        if (n == PACKET)
+            flush();
+    }
+    if (n > 0)
+        flush();
 }
 
 void DetectionPass::count(Index candidates, Index inside, Index on_surface, Index fallbacks, Index by_neighbour)
@@ -101,18 +164,10 @@ void DetectionPass::take(std::size_t k, Index first, Index count, const InsideTe
     this->count(count, inside_count, on_surface, fallbacks, 0);
     if (!m_contact_data)
         return;
-    // Each search starts from the nearest face of the block's previous inside vertex (vertices
-    // come in spatial order), else from the face its inside test crossed. Per block, so that the
-    // work does not depend on the scheduling (the answers do not depend on the starts at all).
-    ContactPoint* slots = m_state.slots.data() + m_state.offsets[k] + static_cast<std::size_t>(first);
-    Index hint_face = -1;
-    for (Index i = 0; i < count; ++i) {
-        if (!results[i].inside)
-            continue;
-        slots[i] = contact_point(k, static_cast<std::size_t>(first + i), results[i].surface_distance_bound,
-                                 hint_face >= 0 ? hint_face : results[i].crossing_face);
-        hint_face = slots[i].face;
-    }
+    contact_points(k, first, count, inside, [&](Index c) {
+        const InsideTest& result = results[c - first];
+        return std::pair{result.surface_distance_bound, result.crossing_face};
+    });
 }
 
 void DetectionPass::take(std::size_t k, Index first, Index count, const GroupedAnswers& answers)
@@ -136,58 +191,61 @@ void DetectionPass::take(std::size_t k, Index first, Index count, const GroupedA
     if (!m_contact_data)
         return;
     CORO_ASSERT(answers.path.size() == answers.group.size()); // distance bounds wanted
-    ContactPoint* slots = m_state.slots.data() + m_state.offsets[k] + static_cast<std::size_t>(first);
-    Index hint_face = -1; // as in take() above
-    for (Index i = 0; i < count; ++i) {
-        if (!inside[i])
-            continue;
-        const auto c = static_cast<std::size_t>(first + i);
-        const Index g = group[i];
-        const double bound = tested[g] == first + i ? answer[g].surface_distance_bound
-                                                    : shared_distance_bound(answers, c);
-        slots[i] = contact_point(k, c, bound, hint_face >= 0 ? hint_face : answer[g].crossing_face);
-        hint_face = slots[i].face;
-    }
+    contact_points(k, first, count, inside, [&](Index c) {
+        const Index g = answers.group[static_cast<std::size_t>(c)];
+        const double bound = tested[g] == c ? answer[g].surface_distance_bound
+                                            : shared_distance_bound(answers, static_cast<std::size_t>(c));
+        return std::pair{bound, answer[g].crossing_face};
+    });
 }
 
 std::vector<ContactPoint> DetectionPass::sorted_points()
 {
     // Per body (the candidates are ordered by (body, other)), a counting sort by vertex: count
     // the inside slots of each vertex, turn the counts into places, and put each point at its
-    // vertex's next place, the body's pairs taken in the order of their other surfaces.
-    const std::vector<std::size_t>& offsets = m_state.offsets;
-    const std::vector<unsigned char>& inside = m_state.inside;
+    // vertex's next place, the body's pairs taken in the order of their other surfaces. Through
+    // raw pointers: the flags are bytes, which may alias anything.
+    const std::size_t* offsets = m_state.offsets.data();
+    const unsigned char* inside = m_state.inside.data();
     std::size_t total = 0;
-    for (const unsigned char flag : inside)
-        total += flag;
+    for (std::size_t s = 0; s < m_state.inside.size(); ++s)
+        total += inside[s];
     std::vector<ContactPoint> points(total);
-    std::vector<Index>& place = m_state.count;
     std::size_t base = 0;
     for (std::size_t first = 0, last = 0; first < m_candidates.size(); first = last) {
         const Index body = m_candidates[first].body;
         while (last < m_candidates.size() && m_candidates[last].body == body)
             ++last;
         const auto vertices = static_cast<std::size_t>(m_surfaces[static_cast<std::size_t>(body)].vertices.rows());
-        place.assign(vertices + 1, 0);
-        for (std::size_t k = first; k < last; ++k)
-            for (std::size_t i = 0; i < m_candidates[k].vertices.size(); ++i)
-                place[static_cast<std::size_t>(m_candidates[k].vertices[i]) + 1] += inside[offsets[k] + i];
+        m_state.count.assign(vertices + 1, 0);
+        Index* place = m_state.count.data();
+        for (std::size_t k = first; k < last; ++k) {
+            const Index* vertex = m_candidates[k].vertices.data();
+            const unsigned char* flag = inside + offsets[k];
+            const std::size_t n = m_candidates[k].vertices.size();
+            for (std::size_t i = 0; i < n; ++i)
+                place[vertex[i] + 1] += flag[i];
+        }
         for (std::size_t v = 0; v < vertices; ++v)
             place[v + 1] += place[v];
         const auto in_body = static_cast<std::size_t>(place[vertices]);
+        ContactPoint* out = points.data() + base;
         for (std::size_t k = first; k < last; ++k) {
-            const PairCandidates& pair = m_candidates[k];
-            for (std::size_t i = 0; i < pair.vertices.size(); ++i) {
-                if (!inside[offsets[k] + i])
+            const Index* vertex = m_candidates[k].vertices.data();
+            const unsigned char* flag = inside + offsets[k];
+            const std::size_t n = m_candidates[k].vertices.size();
+            const ContactPoint* slot = m_contact_data ? m_state.slots.data() + offsets[k] : nullptr;
+            const ContactTarget other = ContactTarget::surface(m_candidates[k].other);
+            for (std::size_t i = 0; i < n; ++i) {
+                if (!flag[i])
                     continue;
-                const Index v = pair.vertices[i];
-                ContactPoint& point = points[base + static_cast<std::size_t>(place[static_cast<std::size_t>(v)]++)];
-                if (m_contact_data) {
-                    point = m_state.slots[offsets[k] + i];
+                ContactPoint& point = out[place[vertex[i]]++];
+                if (slot) {
+                    point = slot[i];
                 } else {
                     point.body = body;
-                    point.vertex = v;
-                    point.other = ContactTarget::surface(pair.other);
+                    point.vertex = vertex[i];
+                    point.other = other;
                 }
             }
         }

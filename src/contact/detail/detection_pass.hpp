@@ -38,9 +38,11 @@ public:
     std::vector<ContactPoint> finish(Index pairs, DetectionStats* stats);
 
 private:
-    /// The contact point of candidate i of pair k, inside its other surface, found with a start
-    /// of the nearest-point search (see NearestSearch::find).
-    ContactPoint contact_point(std::size_t k, std::size_t i, double distance_bound, Index hint_face) const;
+    /// The contact points of the inside candidates among first .. first + count − 1 of pair k,
+    /// into their slots. `start(i)` gives candidate i's distance bound and a face near it (its
+    /// inside test's crossing) to start its nearest-point search from.
+    template <class Start>
+    void contact_points(std::size_t k, Index first, Index count, const unsigned char* inside, const Start& start);
     /// Counts of a block into the thread's stats.
     void count(Index candidates, Index inside, Index on_surface, Index fallbacks, Index by_neighbour);
     /// The points of the inside slots, sorted (a counting sort by vertex per body).
@@ -51,6 +53,7 @@ private:
     bool m_contact_data;
     DetectionState& m_state;
     const CustomNarrowPhase* m_custom; // null, or with an empty nearest: the trees' searches
+    std::vector<Index*> m_last_face;   // per pair: DetectionState::last_face of its vertices
 };
 
 } // namespace coro::detail

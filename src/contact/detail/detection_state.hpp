@@ -9,6 +9,8 @@
 
 #include <tbb/enumerable_thread_specific.h>
 
+#include <map>
+#include <utility>
 #include <vector>
 
 namespace coro::detail {
@@ -22,6 +24,10 @@ public:
     std::vector<unsigned char> inside; ///< per slot: 1 when inside
     std::vector<ContactPoint> slots;   ///< per slot, with contact data: the inside vertices' points
     std::vector<Index> count;          ///< per vertex of one body: the sort's counts
+    /// Per ordered pair (body, other): per vertex of body, the face of `other` nearest to it
+    /// at its last depth search (−1: none yet), where the next search starts (a start that is
+    /// out of date, or from other surfaces, costs time, never the answer).
+    std::map<std::pair<Index, Index>, std::vector<Index>> last_face;
 };
 
 struct ScratchAccess {

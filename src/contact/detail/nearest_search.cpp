@@ -231,12 +231,156 @@ NearestPoint NearestSearch::find(const Vec3& point, double distance_bound, Index
                 best.barycentric = q.barycentric;
             }
         }
-        push_nearest_last(node, lanes, d2, stack, stack_d2, top);
+        push_by_key(node, lanes, d2, stack, stack_d2, top);
     }
     if (best.face < 0) // a bound below the true distance: search again without it
         return distance_bound < std::numeric_limits<double>::infinity() ? find(point) : best;
     best.distance = std::sqrt(best_d2);
     return best;
+}
+
+void NearestSearch::find_packet(const Vec3* points, int count, const double* distance_bounds,
+                                const Index* hint_faces, const Tris* faces, NearestPoint* out) const
+{
+    using simd::F8;
+    static_assert(PACKET == F8::LANES, "a packet is one 8-float register");
+    const auto& nodes = TreeAccess::nodes(m_tree);
+    for (int q = 0; q < count; ++q)
+        out[q] = NearestPoint{};
+    if (nodes.empty() || count <= 0)
+        return;
+    // Per point, the start of find(); unused lanes copy point 0 and are never active.
+    double best_d2[PACKET];
+    float threshold[PACKET];
+    float lo[3][PACKET], hi[3][PACKET], pf[3][PACKET], error[PACKET];
+    for (int q = 0; q < PACKET; ++q) {
+        const Vec3& p = points[q < count ? q : 0];
+        for (int j = 0; j < 3; ++j) {
+            lo[j][q] = float_down(p[j]);
+            hi[j][q] = float_up(p[j]);
+            pf[j][q] = static_cast<float>(p[j]);
+        }
+        error[q] = static_cast<float>((std::abs(p[0]) + std::abs(p[1]) + std::abs(p[2])) * 0x1p-20) + 0x1p-120f;
+        best_d2[q] = std::numeric_limits<double>::infinity();
+        if (q >= count)
+            continue;
+        if (distance_bounds[q] < std::numeric_limits<double>::infinity())
+            best_d2[q] = distance_bounds[q] * distance_bounds[q] * (1.0 + 1e-6) + std::numeric_limits<double>::min();
+        const Index hint = hint_faces[q];
+        if (faces != nullptr && hint >= 0 && hint < faces->rows()) {
+            const auto corner = [&](int c) { return Vec3(m_data + m_stride * (*faces)(hint, c)); };
+            const TrianglePoint t = closest_point_on_triangle(p, corner(0), corner(1), corner(2));
+            const double d2 = (t.point - p).squaredNorm();
+            if (d2 <= best_d2[q]) {
+                best_d2[q] = d2;
+                out[q].face = hint;
+                out[q].point = t.point;
+                out[q].barycentric = t.barycentric;
+            }
+        }
+        threshold[q] = float_threshold(best_d2[q]);
+    }
+    for (int q = count; q < PACKET; ++q)
+        threshold[q] = -1.0f;
+    const F8 p_lo[3] = {F8::load(lo[0]), F8::load(lo[1]), F8::load(lo[2])};
+    const F8 p_hi[3] = {F8::load(hi[0]), F8::load(hi[1]), F8::load(hi[2])};
+    const F8 p_f[3] = {F8::load(pf[0]), F8::load(pf[1]), F8::load(pf[2])};
+    const F8 p_error = F8::load(error);
+    const F8 zero = F8::zero(), shrink = F8::splat(1.0f - 0x1p-18f);
+    F8 limit = F8::load(threshold);
+
+    // Stack entries: a node, the points that need it, and their keys (lower bounds of the
+    // squared distance).
+    Index stack[TreeAccess::STACK_SIZE];
+    unsigned stack_lanes[TreeAccess::STACK_SIZE];
+    float stack_d2[TreeAccess::STACK_SIZE][PACKET];
+    int top = 0;
+    stack[top] = 0;
+    stack_lanes[top] = (1u << count) - 1u;
+    zero.store(stack_d2[top++]);
+    float d2[4][PACKET];
+    unsigned lanes[4];
+    while (top > 0) {
+        --top;
+        const unsigned active = stack_lanes[top] & static_cast<unsigned>((F8::load(stack_d2[top]) <= limit).bits());
+        if (active == 0)
+            continue;
+        const auto n = static_cast<std::size_t>(stack[top]);
+        const TreeAccess::Node& node = nodes[n];
+        const FacePlanes* planes = m_planes ? m_planes->get(n, m_tree, m_data, m_stride) : nullptr;
+        for (int k = 0; k < node.count; ++k) {
+            F8 sum = zero;
+            for (int j = 0; j < 3; ++j) {
+                const F8 d = max(max(F8::splat(node.lo[j][k]) - p_hi[j], p_lo[j] - F8::splat(node.hi[j][k])), zero);
+                sum = sum + d * d;
+            }
+            if (planes) {
+                const F8 dot = F8::splat(planes->normal[0][k]) * p_f[0] - F8::splat(planes->offset[k]) +
+                               F8::splat(planes->normal[1][k]) * p_f[1] + F8::splat(planes->normal[2][k]) * p_f[2];
+                const F8 lower = max(abs(dot) - F8::splat(planes->slack[k]) - p_error, zero) * shrink;
+                sum = max(sum, lower * lower);
+            }
+            sum.store(d2[k]);
+            lanes[k] = active & static_cast<unsigned>((sum <= limit).bits());
+        }
+        // The node's faces, each for the points that need it; then its child nodes, pushed
+        // farther first by the keys of the first point that needs each.
+        for (int m = node.face_mask & ((1 << node.count) - 1); m != 0; m &= m - 1) {
+            const int k = __builtin_ctz(static_cast<unsigned>(m));
+            if (lanes[k] == 0)
+                continue;
+            const auto slot = static_cast<std::size_t>(-1 - node.child[k]);
+            const Index* fv = TreeAccess::slot_vertices(m_tree, slot);
+            const Vec3 a(m_data + m_stride * fv[0]), b(m_data + m_stride * fv[1]), c(m_data + m_stride * fv[2]);
+            const Index f = TreeAccess::face_of_slot(m_tree)[slot];
+            bool improved = false;
+            for (unsigned l = lanes[k]; l != 0; l &= l - 1) {
+                const int q = __builtin_ctz(l);
+                if (d2[k][q] > threshold[q])
+                    continue;
+                const TrianglePoint t = closest_point_on_triangle(points[q], a, b, c);
+                const double dq = (t.point - points[q]).squaredNorm();
+                if (dq < best_d2[q] || (dq == best_d2[q] && f < out[q].face)) {
+                    best_d2[q] = dq;
+                    threshold[q] = float_threshold(dq);
+                    out[q].face = f;
+                    out[q].point = t.point;
+                    out[q].barycentric = t.barycentric;
+                    improved = true;
+                }
+            }
+            if (improved)
+                limit = F8::load(threshold);
+        }
+        int m = 0;
+        for (int k = 0; k < node.count; ++k)
+            m |= (lanes[k] != 0 && !((node.face_mask >> k) & 1)) ? (1 << k) : 0;
+        while (m != 0) {
+            int far = __builtin_ctz(static_cast<unsigned>(m));
+            float far_d2 = d2[far][__builtin_ctz(lanes[far])];
+            for (int rest = m & (m - 1); rest != 0; rest &= rest - 1) {
+                const int k = __builtin_ctz(static_cast<unsigned>(rest));
+                const float key = d2[k][__builtin_ctz(lanes[k])];
+                if (key > far_d2) {
+                    far = k;
+                    far_d2 = key;
+                }
+            }
+            stack[top] = node.child[far];
+            stack_lanes[top] = lanes[far];
+            for (int q = 0; q < PACKET; ++q)
+                stack_d2[top][q] = d2[far][q];
+            ++top;
+            m &= ~(1 << far);
+        }
+    }
+    for (int q = 0; q < count; ++q) {
+        if (out[q].face < 0) { // a bound below the true distance: search again without it
+            out[q] = find(points[q]);
+            continue;
+        }
+        out[q].distance = std::sqrt(best_d2[q]);
+    }
 }
 
 } // namespace coro::detail
