@@ -308,6 +308,7 @@ void NearestSearch::find_packet(const Vec3* points, int count, const double* dis
         const auto n = static_cast<std::size_t>(stack[top]);
         const TreeAccess::Node& node = nodes[n];
         const FacePlanes* planes = m_planes ? m_planes->get(n, m_tree, m_data, m_stride) : nullptr;
+        int needed = 0; // bit k: some point needs child k
         for (int k = 0; k < node.count; ++k) {
             F8 sum = zero;
             for (int j = 0; j < 3; ++j) {
@@ -322,13 +323,12 @@ void NearestSearch::find_packet(const Vec3* points, int count, const double* dis
             }
             sum.store(d2[k]);
             lanes[k] = active & static_cast<unsigned>((sum <= limit).bits());
+            needed |= lanes[k] != 0 ? 1 << k : 0;
         }
         // The node's faces, each for the points that need it; then its child nodes, pushed
         // farther first by the keys of the first point that needs each.
-        for (int m = node.face_mask & ((1 << node.count) - 1); m != 0; m &= m - 1) {
+        for (int m = needed & node.face_mask; m != 0; m &= m - 1) {
             const int k = __builtin_ctz(static_cast<unsigned>(m));
-            if (lanes[k] == 0)
-                continue;
             const auto slot = static_cast<std::size_t>(-1 - node.child[k]);
             const Index* fv = TreeAccess::slot_vertices(m_tree, slot);
             const Vec3 a(m_data + m_stride * fv[0]), b(m_data + m_stride * fv[1]), c(m_data + m_stride * fv[2]);
@@ -352,10 +352,7 @@ void NearestSearch::find_packet(const Vec3* points, int count, const double* dis
             if (improved)
                 limit = F8::load(threshold);
         }
-        int m = 0;
-        for (int k = 0; k < node.count; ++k)
-            m |= (lanes[k] != 0 && !((node.face_mask >> k) & 1)) ? (1 << k) : 0;
-        while (m != 0) {
+        for (int m = needed & ~node.face_mask; m != 0;) {
             int far = __builtin_ctz(static_cast<unsigned>(m));
             float far_d2 = d2[far][__builtin_ctz(lanes[far])];
             for (int rest = m & (m - 1); rest != 0; rest &= rest - 1) {
@@ -368,8 +365,7 @@ void NearestSearch::find_packet(const Vec3* points, int count, const double* dis
             }
             stack[top] = node.child[far];
             stack_lanes[top] = lanes[far];
-            for (int q = 0; q < PACKET; ++q)
-                stack_d2[top][q] = d2[far][q];
+            F8::load(d2[far]).store(stack_d2[top]);
             ++top;
             m &= ~(1 << far);
         }
