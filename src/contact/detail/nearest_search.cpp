@@ -131,9 +131,12 @@ const FacePlanes* FacePlaneCache::claim(std::size_t node, const AabbTree& tree, 
                                         std::ptrdiff_t stride)
 {
     std::uint32_t stamp = m_stamp[node].load(std::memory_order_acquire);
-    if (stamp == busy() || (stamp != ready() && !m_stamp[node].compare_exchange_strong(
-                                                    stamp, busy(), std::memory_order_acquire)))
-        return stamp == ready() ? &m_planes[node] : nullptr; // ready meanwhile, or another thread's
+    if (stamp == ready())
+        return &m_planes[node];
+    if (stamp == busy())
+        return nullptr; // another thread computes them
+    if (!m_stamp[node].compare_exchange_strong(stamp, busy(), std::memory_order_acquire))
+        return stamp == ready() ? &m_planes[node] : nullptr; // done meanwhile, or being done
     compute_face_planes(tree, node, data, stride, m_planes[node]);
     m_stamp[node].store(ready(), std::memory_order_release);
     return &m_planes[node];
