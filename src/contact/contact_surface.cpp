@@ -3,6 +3,8 @@
 #include <corocontact/core/error.hpp>
 #include <corocontact/core/surface_mesh.hpp>
 
+#include "detail/tree_access.hpp"
+
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
@@ -50,6 +52,25 @@ SurfaceEdges surface_edges(const Tris& faces, Index num_vertices)
     return out;
 }
 
+namespace {
+
+/// surface_edges() with the faces' tree slots filled.
+SurfaceEdges tree_edges(const Tris& faces, CRef<Positions> vertices, const AabbTree& tree)
+{
+    SurfaceEdges edges = surface_edges(faces, static_cast<Index>(vertices.rows()));
+    const std::vector<Index>& face_of_slot = detail::TreeAccess::face_of_slot(tree);
+    std::vector<Index> slot_of(face_of_slot.size());
+    for (std::size_t s = 0; s < face_of_slot.size(); ++s)
+        slot_of[static_cast<std::size_t>(face_of_slot[s])] = static_cast<Index>(s);
+    edges.tree_slots.resize(edges.faces.size());
+    for (std::size_t k = 0; k < edges.faces.size(); ++k)
+        edges.tree_slots[k] = {slot_of[static_cast<std::size_t>(edges.faces[k][0])],
+                               slot_of[static_cast<std::size_t>(edges.faces[k][1])]};
+    return edges;
+}
+
+} // namespace
+
 ContactSurface ContactSurface::from_body(std::string name, CRef<Positions> body_positions, const Tris& faces)
 {
     ContactSurface surface;
@@ -73,7 +94,7 @@ ContactSurface ContactSurface::from_body(std::string name, CRef<Positions> body_
         surface.vertices.row(static_cast<Index>(i)) = body_positions.row(surface.body_node[i]);
     surface.closed = faces.rows() > 0 && check_surface(surface.faces).closed_and_oriented();
     surface.tree.build(surface.vertices, surface.faces);
-    surface.edges = surface_edges(surface.faces, static_cast<Index>(surface.vertices.rows()));
+    surface.edges = tree_edges(surface.faces, surface.vertices, surface.tree);
     return surface;
 }
 
@@ -93,7 +114,7 @@ ContactSurface ContactSurface::from_embedding(std::string name, CRef<Positions> 
     surface.update_vertices(body_positions);
     surface.closed = faces.rows() > 0 && check_surface(surface.faces).closed_and_oriented();
     surface.tree.build(surface.vertices, surface.faces);
-    surface.edges = surface_edges(surface.faces, static_cast<Index>(surface.vertices.rows()));
+    surface.edges = tree_edges(surface.faces, surface.vertices, surface.tree);
     return surface;
 }
 

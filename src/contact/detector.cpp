@@ -159,14 +159,14 @@ std::vector<ContactPoint> detect_contacts(const std::vector<ContactSurface>& sur
     // phase for both.
     const auto pairs = overlapping_surfaces(surfaces);
     std::vector<PairCandidates> candidates;
-    std::vector<detail::FacePairs> face_pairs;
+    std::vector<detail::SlotPairs> slot_pairs;
     tbb::parallel_invoke([&] { candidates = pair_candidates(surfaces, pairs, settings.mode); },
-                         [&] { face_pairs = detail::overlapping_face_pairs(surfaces, pairs); });
+                         [&] { slot_pairs = detail::overlapping_slot_pairs(surfaces, pairs); });
     // Each pair's answers are taken in its own task, as they come; with depth searches to do,
     // its blocks are nested tasks.
     DetectionPass pass(surfaces, candidates, settings.contact_data, state);
     detail::grouped_inside_tests(
-        surfaces, candidates, face_pairs, settings.tolerances, settings.contact_data, state.groups,
+        surfaces, candidates, slot_pairs, settings.tolerances, settings.contact_data, state.groups,
         [&](std::size_t k, const detail::GroupedAnswers& answers) {
             const auto n = static_cast<Index>(answers.group.size());
             const Index blocks = (n + VERTEX_BLOCK - 1) / VERTEX_BLOCK;

@@ -104,7 +104,7 @@ std::vector<std::array<Index, 2>> walk_tasks(const AabbTree& ta, const AabbTree&
     return level;
 }
 
-/// The face pairs below node a_root of `ta` and b_root of `tb`, appended to `pairs`.
+/// The slot pairs below node a_root of `ta` and b_root of `tb`, appended to `pairs`.
 void walk(const AabbTree& ta, const AabbTree& tb, const WideBox& region, Index a_root, Index b_root, Pairs& pairs)
 {
     // Float boxes bound the exact ones and the region is widened to floats, so a lane is dropped
@@ -112,15 +112,13 @@ void walk(const AabbTree& ta, const AabbTree& tb, const WideBox& region, Index a
     // exact test would read six corners per pair, and almost never fail).
     const auto& nodes_a = TreeAccess::nodes(ta);
     const auto& nodes_b = TreeAccess::nodes(tb);
-    const auto& face_a = TreeAccess::face_of_slot(ta);
-    const auto& face_b = TreeAccess::face_of_slot(tb);
     // The pairs gather on the stack and join `pairs` a block at a time: pushed one by one, the
     // growth of the many small vectors of a parallel walk costs as much as its box tests.
     constexpr int BLOCK = 256;
     std::array<Index, 2> block[BLOCK];
     int in_block = 0;
     const auto emit = [&](Index slot_a, Index slot_b) {
-        block[in_block++] = {face_a[static_cast<std::size_t>(slot_a)], face_b[static_cast<std::size_t>(slot_b)]};
+        block[in_block++] = {slot_a, slot_b};
         if (in_block == BLOCK) {
             pairs.insert(pairs.end(), block, block + BLOCK);
             in_block = 0;
@@ -172,25 +170,27 @@ void walk(const AabbTree& ta, const AabbTree& tb, const WideBox& region, Index a
 
 } // namespace
 
-void AabbTree::overlapping_faces(const AabbTree& other, const Aabb& region, Pairs& pairs) const
+void detail::overlapping_slots(const AabbTree& a, const AabbTree& b, const Aabb& region, Pairs& pairs)
 {
     pairs.clear();
-    if (m_nodes.empty() || other.m_nodes.empty() || region.empty() || !m_bounds.overlaps(region) ||
-        !other.m_bounds.overlaps(region) || !m_bounds.overlaps(other.m_bounds))
+    const auto& nodes_a = TreeAccess::nodes(a);
+    const auto& nodes_b = TreeAccess::nodes(b);
+    if (nodes_a.empty() || nodes_b.empty() || region.empty() || !a.bounds().overlaps(region) ||
+        !b.bounds().overlaps(region) || !a.bounds().overlaps(b.bounds()))
         return;
     const WideBox wide_region = wide_box(region);
     constexpr Index PARALLEL_WALK_FACES = 1024;
-    if (num_faces() < PARALLEL_WALK_FACES) {
-        walk(*this, other, wide_region, 0, 0, pairs);
+    if (a.num_faces() < PARALLEL_WALK_FACES) {
+        walk(a, b, wide_region, 0, 0, pairs);
         return;
     }
     // Large trees: the walk's node pairs a few levels down both trees, found level by level
     // (each level of both trees taken once), as tasks, their pairs joined in task order.
-    const std::vector<std::array<Index, 2>> tasks = walk_tasks(*this, other, wide_region);
+    const std::vector<std::array<Index, 2>> tasks = walk_tasks(a, b, wide_region);
     std::vector<Pairs> parts(tasks.size());
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, tasks.size(), 1), [&](const tbb::blocked_range<std::size_t>& r) {
         for (std::size_t t = r.begin(); t < r.end(); ++t)
-            walk(*this, other, wide_region, tasks[t][0], tasks[t][1], parts[t]);
+            walk(a, b, wide_region, tasks[t][0], tasks[t][1], parts[t]);
     });
     std::size_t total = 0;
     for (const Pairs& part : parts)
@@ -198,6 +198,15 @@ void AabbTree::overlapping_faces(const AabbTree& other, const Aabb& region, Pair
     pairs.reserve(total);
     for (const Pairs& part : parts)
         pairs.insert(pairs.end(), part.begin(), part.end());
+}
+
+void AabbTree::overlapping_faces(const AabbTree& other, const Aabb& region, Pairs& pairs) const
+{
+    detail::overlapping_slots(*this, other, region, pairs);
+    for (auto& [a, b] : pairs) {
+        a = m_face_of_slot[static_cast<std::size_t>(a)];
+        b = other.m_face_of_slot[static_cast<std::size_t>(b)];
+    }
 }
 
 } // namespace coro

@@ -5,6 +5,7 @@
 #include <corocontact/core/primitives.hpp>
 
 #include "detail/clear_edge_groups.hpp"
+#include "detail/tree_access.hpp"
 
 #include <gtest/gtest.h>
 
@@ -104,7 +105,7 @@ Index expect_groups_agree_with_winding_numbers(const ContactSurface& a, const Co
     std::vector<Index> candidates;
     a.tree.vertices_in_box(a.vertices, region, candidates);
     Pairs pairs;
-    a.tree.overlapping_faces(b.tree, region, pairs);
+    detail::overlapping_slots(a.tree, b.tree, region, pairs);
     std::vector<double> path;
     const std::vector<Index> decider = deciders(a, b, pairs, detail::PairColumn::FIRST, candidates, &path);
     EXPECT_EQ(decider.size(), candidates.size());
@@ -221,7 +222,7 @@ TEST(ClearEdgeGroups, GroupsDoNotDependOnEarlierCallsWithTheSameScratch)
         std::vector<Index> candidates;
         s.tree.vertices_in_box(s.vertices, region, candidates);
         Pairs pairs;
-        s.tree.overlapping_faces(other.tree, region, pairs);
+        detail::overlapping_slots(s.tree, other.tree, region, pairs);
         Groups g;
         g.decider = deciders(s, other, pairs, detail::PairColumn::FIRST, candidates, &g.path, scratch);
         return g;
@@ -254,7 +255,7 @@ TEST(ClearEdgeGroups, VerticesOnTheOtherSurfaceStandAlone)
     a.tree.vertices_in_box(a.vertices, region, candidates);
     ASSERT_FALSE(candidates.empty());
     Pairs pairs;
-    a.tree.overlapping_faces(b.tree, region, pairs);
+    detail::overlapping_slots(a.tree, b.tree, region, pairs);
     std::vector<double> path;
     const std::vector<Index> decider = deciders(a, b, pairs, detail::PairColumn::FIRST, candidates, &path);
     int on_surface = 0;
@@ -269,7 +270,7 @@ TEST(ClearEdgeGroups, VerticesOnTheOtherSurfaceStandAlone)
     }
     EXPECT_EQ(on_surface, 2); // (1, 0.5, 0.5) and (1, 0.5, 1)
 
-    // The other way round, with b's faces in the second column of the pairs.
+    // The other way round, with b's slots in the second column of the pairs.
     Pairs reversed = pairs;
     for (auto& pair : reversed)
         std::swap(pair[0], pair[1]);

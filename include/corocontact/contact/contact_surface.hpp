@@ -20,6 +20,10 @@ struct SurfaceEdges {
     std::vector<Index> start;                  ///< #V + 1
     std::vector<Index> vertex;                 ///< 2 × #edges
     std::vector<std::array<Index, 2>> faces;   ///< 2 × #edges
+    /// The same faces by their places in the surface's tree (the order of its leaves, in which
+    /// neighbouring faces lie close in memory): what the detector's grouping reads. Filled by
+    /// ContactSurface when it builds its tree; empty from surface_edges().
+    std::vector<std::array<Index, 2>> tree_slots;
 };
 
 /// The edges of `faces` (#F×3 into #V = num_vertices vertices); a face with a repeated vertex

@@ -1,7 +1,10 @@
 #include "clear_edge_groups.hpp"
 
+#include <corocontact/core/error.hpp>
+
 #include "segment_triangle.hpp"
 #include "simd.hpp"
+#include "tree_access.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -45,7 +48,7 @@ private:
 /// Resets the entries of `paired` that a call set, however it ends.
 struct PairedReset {
     std::vector<Index>& paired;
-    const FacePairs& pairs;
+    const SlotPairs& pairs;
     std::size_t mine;
     ~PairedReset()
     {
@@ -56,13 +59,20 @@ struct PairedReset {
 
 } // namespace
 
-Index clear_edge_groups(const ContactSurface& surface, const ContactSurface& other, const FacePairs& pairs,
+Index clear_edge_groups(const ContactSurface& surface, const ContactSurface& other, const SlotPairs& pairs,
                         PairColumn column, const std::vector<Index>& candidates, GroupScratch& scratch,
                         std::vector<Index>& group, std::vector<Index>& firsts, std::vector<double>* path)
 {
     const std::size_t n = candidates.size();
     const auto face_count = static_cast<std::size_t>(surface.faces.rows());
     const auto vertex_count = static_cast<std::size_t>(surface.vertices.rows());
+    CORO_CHECK(surface.edges.start.size() == vertex_count + 1 &&
+                   surface.edges.tree_slots.size() == surface.edges.vertex.size() &&
+                   surface.tree.num_faces() == surface.faces.rows(),
+               InputError,
+               "surface '" << surface.name
+                           << "': its edges and tree were not built with it (make contact surfaces with "
+                              "ContactSurface::from_body or from_embedding)");
 
     // Every array sized before any entry is set, so that a failed allocation leaves the
     // invariants of the scratch intact.
@@ -86,10 +96,11 @@ Index clear_edge_groups(const ContactSurface& surface, const ContactSurface& oth
     if (path)
         path->resize(n);
 
-    // The faces of `other` paired with each paired face of this surface: paired faces get dense
-    // ids, the partners of id j are partners[start[j], start[j + 1]). Raw pointers: through the
-    // vectors, every store or call in the loops below made the compiler load their data
-    // pointers again.
+    // The faces of `other` paired with each paired face of this surface, all as tree slots (the
+    // trees' leaf order, in which neighbouring faces lie close in memory; the edges give theirs
+    // in SurfaceEdges::tree_slots): paired faces get dense ids, the partners of id j are
+    // partners[start[j], start[j + 1]). Raw pointers: through the vectors, every store or call in
+    // the loops below made the compiler load their data pointers again.
     const std::size_t mine = column == PairColumn::FIRST ? 0 : 1, theirs = 1 - mine;
     const PairedReset reset{scratch.paired, pairs, mine};
     Index* const paired = scratch.paired.data();
@@ -118,7 +129,7 @@ Index clear_edge_groups(const ContactSurface& surface, const ContactSurface& oth
 
     const double* data = surface.vertices.data();
     const double* other_data = other.vertices.data();
-    const Index* other_faces = other.faces.data();
+    const Index* other_corners = TreeAccess::slot_vertices(other.tree, 0);
     // A face of `other` that meets the edge meets the box of each face holding it: test the
     // partners of the face with fewer (a face with none: the edge is clear, below). Not inlined:
     // in the search's loop over edges it made that loop spill registers.
@@ -138,7 +149,7 @@ Index clear_edge_groups(const ContactSurface& surface, const ContactSurface& oth
             return clear == (1 << taken) - 1;
         };
         for (Index k = start[static_cast<std::size_t>(id)]; k < start[static_cast<std::size_t>(id) + 1]; ++k) {
-            const Index* fv = other_faces + 3 * static_cast<std::ptrdiff_t>(partners[static_cast<std::size_t>(k)]);
+            const Index* fv = other_corners + 3 * static_cast<std::ptrdiff_t>(partners[static_cast<std::size_t>(k)]);
             const double* a = other_data + 3 * static_cast<std::ptrdiff_t>(fv[0]);
             const double* b = other_data + 3 * static_cast<std::ptrdiff_t>(fv[1]);
             const double* c = other_data + 3 * static_cast<std::ptrdiff_t>(fv[2]);
@@ -165,7 +176,7 @@ Index clear_edge_groups(const ContactSurface& surface, const ContactSurface& oth
     Index* const queue = scratch.queue.data();
     const Index* const edge_start = surface.edges.start.data();
     const Index* const edge_vertex = surface.edges.vertex.data();
-    const std::array<Index, 2>* const edge_faces = surface.edges.faces.data();
+    const std::array<Index, 2>* const edge_faces = surface.edges.tree_slots.data();
     // The search with or without path lengths, compiled apart: the test of `path` in the loop
     // over edges kept the lengths' loads and address arithmetic in it.
     const auto search = [&](auto with_path) {

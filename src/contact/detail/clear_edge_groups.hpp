@@ -11,10 +11,11 @@
 
 namespace coro::detail {
 
-/// Face pairs (face of one surface, face of the other), from AabbTree::overlapping_faces.
-using FacePairs = std::vector<std::array<Index, 2>>;
+/// Face pairs (face of one surface, face of the other), each face given by its slot in its
+/// surface's tree (overlapping_slots in tree_access.hpp).
+using SlotPairs = std::vector<std::array<Index, 2>>;
 
-/// Which column of a FacePairs holds the faces of the surface being grouped.
+/// Which column of a SlotPairs holds the faces of the surface being grouped.
 enum class PairColumn { FIRST, SECOND };
 
 /// Working arrays of clear_edge_groups(), kept from call to call, as large as the largest
@@ -22,7 +23,7 @@ enum class PairColumn { FIRST, SECOND };
 /// entries it set) and `state` holds no UNGROUPED (any other value stops the search as
 /// NOT_CANDIDATE does, so stale groups need no reset). One per thread.
 struct GroupScratch {
-    std::vector<Index> paired;    // per face of the grouped surface: −1, or its dense id among the paired faces
+    std::vector<Index> paired;    // per slot of the grouped surface: −1, or its dense id among the paired faces
     std::vector<Index> state;     // per vertex of the grouped surface
     std::vector<Index> start, partners, next, queue;
     std::vector<double> length_to; // per vertex, valid where grouped
@@ -34,8 +35,8 @@ struct GroupScratch {
 /// each face of `other` paired with one of its faces whose box meets the edge's is shown to miss
 /// the edge by signs beyond their rounding (segment_triangle.hpp). A vertex on `other`'s surface
 /// meets a face with every edge, so it is a group of its own.
-/// @param[in] pairs       AabbTree::overlapping_faces of the two surfaces over a region that
-///                        holds every candidate, `surface`'s faces in column `column`
+/// @param[in] pairs       overlapping_slots() of the two surfaces' trees over a region that
+///                        holds every candidate, `surface`'s in column `column`
 /// @param[in] candidates  distinct vertices of `surface` in that region
 /// @param[out] group      per candidate, its group, 0 .. groups − 1, numbered in the order of
 ///                        their first candidates
@@ -43,7 +44,7 @@ struct GroupScratch {
 /// @param[out] path       null, or per candidate an upper bound of the length of a path of clear
 ///                        edges from its group's first candidate (0 for that one) [m]
 /// @return the number of groups
-Index clear_edge_groups(const ContactSurface& surface, const ContactSurface& other, const FacePairs& pairs,
+Index clear_edge_groups(const ContactSurface& surface, const ContactSurface& other, const SlotPairs& pairs,
                         PairColumn column, const std::vector<Index>& candidates, GroupScratch& scratch,
                         std::vector<Index>& group, std::vector<Index>& firsts, std::vector<double>* path);
 

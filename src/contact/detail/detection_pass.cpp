@@ -5,6 +5,8 @@
 #include <corocontact/core/error.hpp>
 
 #include <algorithm>
+#include <array>
+#include <cstdint>
 #include <map>
 #include <utility>
 
@@ -201,17 +203,18 @@ void DetectionPass::take(std::size_t k, Index first, Index count, const GroupedA
 
 std::vector<ContactPoint> DetectionPass::sorted_points()
 {
-    // Per body (the candidates are ordered by (body, other)), a counting sort by vertex: count
-    // the inside slots of each vertex, turn the counts into places, and put each point at its
-    // vertex's next place, the body's pairs taken in the order of their other surfaces. Through
-    // raw pointers: the flags are bytes, which may alias anything.
+    // Per body (the candidates are ordered by (body, other)), a counting sort by vertex of the
+    // inside slots: count the slots of each vertex, turn the counts into places, put each slot
+    // at its vertex's next place (the body's pairs taken in the order of their other surfaces),
+    // then write the points in that order. Through raw pointers: the flags are bytes, which may
+    // alias anything.
     const std::size_t* offsets = m_state.offsets.data();
     const unsigned char* inside = m_state.inside.data();
     std::size_t total = 0;
     for (std::size_t s = 0; s < m_state.inside.size(); ++s)
         total += inside[s];
-    std::vector<ContactPoint> points(total);
-    std::size_t base = 0;
+    std::vector<ContactPoint> points;
+    points.reserve(total);
     for (std::size_t first = 0, last = 0; first < m_candidates.size(); first = last) {
         const Index body = m_candidates[first].body;
         while (last < m_candidates.size() && m_candidates[last].body == body)
@@ -228,30 +231,29 @@ std::vector<ContactPoint> DetectionPass::sorted_points()
         }
         for (std::size_t v = 0; v < vertices; ++v)
             place[v + 1] += place[v];
-        const auto in_body = static_cast<std::size_t>(place[vertices]);
-        ContactPoint* out = points.data() + base;
+        m_state.order.resize(static_cast<std::size_t>(place[vertices]));
+        std::array<std::uint32_t, 2>* order = m_state.order.data(); // (pair, candidate)
         for (std::size_t k = first; k < last; ++k) {
             const Index* vertex = m_candidates[k].vertices.data();
             const unsigned char* flag = inside + offsets[k];
             const std::size_t n = m_candidates[k].vertices.size();
-            const ContactPoint* slot = m_contact_data ? m_state.slots.data() + offsets[k] : nullptr;
-            const ContactTarget other = ContactTarget::surface(m_candidates[k].other);
-            for (std::size_t i = 0; i < n; ++i) {
-                if (!flag[i])
-                    continue;
-                ContactPoint& point = out[place[vertex[i]]++];
-                if (slot) {
-                    point = slot[i];
-                } else {
-                    point.body = body;
-                    point.vertex = vertex[i];
-                    point.other = other;
-                }
-            }
+            for (std::size_t i = 0; i < n; ++i)
+                if (flag[i])
+                    order[place[vertex[i]]++] = {static_cast<std::uint32_t>(k), static_cast<std::uint32_t>(i)};
         }
-        base += in_body;
+        for (const auto& [k, i] : m_state.order) {
+            if (m_contact_data) {
+                points.push_back(m_state.slots[offsets[k] + i]);
+                continue;
+            }
+            // Without contact data the slots hold no points: made from the candidates.
+            ContactPoint& point = points.emplace_back();
+            point.body = body;
+            point.vertex = m_candidates[k].vertices[i];
+            point.other = ContactTarget::surface(m_candidates[k].other);
+        }
     }
-    CORO_ASSERT(base == total);
+    CORO_ASSERT(points.size() == total);
     return points;
 }
 

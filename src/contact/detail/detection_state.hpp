@@ -9,6 +9,8 @@
 
 #include <tbb/enumerable_thread_specific.h>
 
+#include <array>
+#include <cstdint>
 #include <map>
 #include <utility>
 #include <vector>
@@ -24,6 +26,7 @@ public:
     std::vector<unsigned char> inside; ///< per slot: 1 when inside
     std::vector<ContactPoint> slots;   ///< per slot, with contact data: the inside vertices' points
     std::vector<Index> count;          ///< per vertex of one body: the sort's counts
+    std::vector<std::array<std::uint32_t, 2>> order; ///< the inside (pair, candidate) of one body, sorted
     /// Per ordered pair (body, other): per vertex of body, the face of `other` nearest to it
     /// at its last depth search (−1: none yet), where the next search starts (a start that is
     /// out of date, or from other surfaces, costs time, never the answer).

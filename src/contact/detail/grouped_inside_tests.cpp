@@ -1,6 +1,7 @@
 #include "grouped_inside_tests.hpp"
 
 #include "inside_tests.hpp"
+#include "tree_access.hpp"
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -20,36 +21,36 @@ constexpr std::size_t TEST_BLOCK = 256;
 
 } // namespace
 
-std::vector<FacePairs> overlapping_face_pairs(const std::vector<ContactSurface>& surfaces,
+std::vector<SlotPairs> overlapping_slot_pairs(const std::vector<ContactSurface>& surfaces,
                                               const std::vector<std::pair<Index, Index>>& pairs)
 {
-    std::vector<FacePairs> face_pairs(pairs.size());
+    std::vector<SlotPairs> slot_pairs(pairs.size());
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, pairs.size(), 1), [&](const tbb::blocked_range<std::size_t>& r) {
         for (std::size_t j = r.begin(); j < r.end(); ++j) {
             const ContactSurface& a = surfaces[static_cast<std::size_t>(pairs[j].first)];
             const ContactSurface& b = surfaces[static_cast<std::size_t>(pairs[j].second)];
             if (a.closed || b.closed)
-                a.tree.overlapping_faces(b.tree, a.tree.bounds().intersection(b.tree.bounds()), face_pairs[j]);
+                overlapping_slots(a.tree, b.tree, a.tree.bounds().intersection(b.tree.bounds()), slot_pairs[j]);
         }
     });
-    return face_pairs;
+    return slot_pairs;
 }
 
 void grouped_inside_tests(const std::vector<ContactSurface>& surfaces, const std::vector<PairCandidates>& candidates,
-                          const std::vector<FacePairs>& face_pairs, const AxisRayTolerances& tolerances,
+                          const std::vector<SlotPairs>& slot_pairs, const AxisRayTolerances& tolerances,
                           bool distance_bounds, tbb::enumerable_thread_specific<GroupScratch>& scratch,
                           const std::function<void(std::size_t pair, const GroupedAnswers& answers)>& use)
 {
     const std::size_t pairs = candidates.size();
     // The face pairs of each k: candidates holds (a, b) and (b, a), ordered by (body, other), so
     // those with body < other come in the order of their pairs; the other direction takes the
-    // face pairs of its reverse, columns swapped.
+    // slot pairs of its reverse, columns swapped.
     std::vector<std::size_t> pair_of(pairs);
     std::size_t lower = 0;
     for (std::size_t k = 0; k < pairs; ++k)
         if (candidates[k].body < candidates[k].other)
             pair_of[k] = lower++;
-    CORO_ASSERT(lower == face_pairs.size());
+    CORO_ASSERT(lower == slot_pairs.size());
     for (std::size_t k = 0; k < pairs; ++k) {
         const PairCandidates& pair = candidates[k];
         if (pair.body < pair.other)
@@ -74,7 +75,7 @@ void grouped_inside_tests(const std::vector<ContactSurface>& surfaces, const std
             const ContactSurface& other = surfaces[static_cast<std::size_t>(pair.other)];
             const std::size_t n = pair.vertices.size();
             if (other.closed) {
-                clear_edge_groups(body, other, face_pairs[pair_of[k]],
+                clear_edge_groups(body, other, slot_pairs[pair_of[k]],
                                   pair.body < pair.other ? PairColumn::FIRST : PairColumn::SECOND, pair.vertices,
                                   scratch.local(), group, tested, distance_bounds ? &answers.path : nullptr);
             } else {

@@ -26,9 +26,9 @@ struct GroupedAnswers {
     std::vector<double> path;       ///< size n with distance bounds, else empty
 };
 
-/// For each pair (a, b) of `pairs`, AabbTree::overlapping_faces of a's tree and b's over the
-/// overlap of their boxes when either surface is closed (else none), as TBB tasks.
-std::vector<FacePairs> overlapping_face_pairs(const std::vector<ContactSurface>& surfaces,
+/// For each pair (a, b) of `pairs`, overlapping_slots() of a's tree and b's over the overlap of
+/// their boxes when either surface is closed (else none), as TBB tasks.
+std::vector<SlotPairs> overlapping_slot_pairs(const std::vector<ContactSurface>& surfaces,
                                               const std::vector<std::pair<Index, Index>>& pairs);
 
 /// Exact-mode answers for every candidate vertex, handed over pair by pair: use(k, answers) for
@@ -37,10 +37,10 @@ std::vector<FacePairs> overlapping_face_pairs(const std::vector<ContactSurface>&
 /// grouped by clear_edge_groups() and only the first of each group is tested; the others share
 /// its answer, with shared_distance_bound() as theirs. Else every candidate is tested. The tests
 /// of a pair with many groups run in nested tasks; the answers do not depend on the scheduling.
-/// @param[in] face_pairs  overlapping_face_pairs() of the pairs (body < other) of `candidates`,
+/// @param[in] slot_pairs  overlapping_slot_pairs() of the pairs (body < other) of `candidates`,
 ///                        in their order
 void grouped_inside_tests(const std::vector<ContactSurface>& surfaces, const std::vector<PairCandidates>& candidates,
-                          const std::vector<FacePairs>& face_pairs, const AxisRayTolerances& tolerances,
+                          const std::vector<SlotPairs>& slot_pairs, const AxisRayTolerances& tolerances,
                           bool distance_bounds, tbb::enumerable_thread_specific<GroupScratch>& scratch,
                           const std::function<void(std::size_t pair, const GroupedAnswers& answers)>& use);
 

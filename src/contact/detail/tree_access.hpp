@@ -6,9 +6,11 @@
 #include <corocontact/contact/aabb_tree.hpp>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstddef>
 #include <limits>
+#include <vector>
 
 namespace coro::detail {
 
@@ -66,6 +68,12 @@ struct TreeAccess {
         return box;
     }
 };
+
+/// AabbTree::overlapping_faces with each face as its slot in its tree (no lookup of its index:
+/// what the grouping takes, whose reads of a face's corners then stay in slot order).
+/// @param[out] slot_pairs  (slot in `a`, slot in `b`), each pair once
+void overlapping_slots(const AabbTree& a, const AabbTree& b, const Aabb& region,
+                       std::vector<std::array<Index, 2>>& slot_pairs);
 
 /// Pushes the child nodes among `lanes` of `node` (face lanes are skipped), each with its key,
 /// the largest key first, so that they are popped in the order of their keys.
