@@ -99,8 +99,8 @@ Index clear_edge_groups(const ContactSurface& surface, const ContactSurface& oth
     // The faces of `other` paired with each paired face of this surface, all as tree slots (the
     // trees' leaf order, in which neighbouring faces lie close in memory; the edges give theirs
     // in SurfaceEdges::tree_slots): paired faces get dense ids, the partners of id j are
-    // partners[start[j], start[j + 1]). Raw pointers: through the vectors, every store or call in
-    // the loops below made the compiler load their data pointers again.
+    // partners[start[j], start[j + 1]). Raw pointers: through the vectors, the compiler would load
+    // their data pointers again after every store or call in the loops below.
     const std::size_t mine = column == PairColumn::FIRST ? 0 : 1, theirs = 1 - mine;
     const PairedReset reset{scratch.paired, pairs, mine};
     Index* const paired = scratch.paired.data();
@@ -132,7 +132,7 @@ Index clear_edge_groups(const ContactSurface& surface, const ContactSurface& oth
     const Index* other_corners = TreeAccess::slot_vertices(other.tree, 0);
     // A face of `other` that meets the edge meets the box of each face holding it: test the
     // partners of the face with fewer (a face with none: the edge is clear, below). Not inlined:
-    // in the search's loop over edges it made that loop spill registers.
+    // inlined, it makes the search's loop over edges spill registers.
     const auto paired_edge_clear = [&](Index u, Index v, Index id0, Index id1) __attribute__((noinline)) {
         const auto count = [&](Index id) {
             return start[static_cast<std::size_t>(id) + 1] - start[static_cast<std::size_t>(id)];
@@ -177,8 +177,8 @@ Index clear_edge_groups(const ContactSurface& surface, const ContactSurface& oth
     const Index* const edge_start = surface.edges.start.data();
     const Index* const edge_vertex = surface.edges.vertex.data();
     const std::array<Index, 2>* const edge_faces = surface.edges.tree_slots.data();
-    // The search with or without path lengths, compiled apart: the test of `path` in the loop
-    // over edges kept the lengths' loads and address arithmetic in it.
+    // The search with or without path lengths, compiled apart, so that the loop over edges
+    // carries the lengths' loads and address arithmetic only when they are wanted.
     const auto search = [&](auto with_path) {
         for (std::size_t i = 0; i < n; ++i) {
             const Index first = candidates[i];
@@ -194,8 +194,8 @@ Index clear_edge_groups(const ContactSurface& surface, const ContactSurface& oth
             while (head < tail) {
                 // The edges of consecutive vertices in the queue lie far apart in memory and are
                 // rarely cached at the start of a frame (the other work of a step evicts them):
-                // the loads of the edges of a vertex a few places ahead start now, its start
-                // entry having been prefetched when it was queued.
+                // the loads of the edges of a vertex a few places ahead start now (its start
+                // entry is prefetched when it is queued).
                 const Index ahead = queue[std::min(head + PREFETCH_AHEAD, tail - 1)];
                 const auto ahead_edges = static_cast<std::size_t>(edge_start[static_cast<std::size_t>(ahead)]);
                 __builtin_prefetch(edge_vertex + ahead_edges); // may be one past the end
