@@ -1,5 +1,9 @@
 #include <corocontact/io/scene_loader.hpp>
 
+#include "detail/embedding_check.hpp"
+#include "detail/magnitudes.hpp"
+#include "detail/memory_budget.hpp"
+
 #include <corocontact/core/error.hpp>
 #include <corocontact/core/primitives.hpp>
 #include <corocontact/io/mesh_readers.hpp>
@@ -7,6 +11,7 @@
 #include <corocontact/core/surface_mesh.hpp>
 #include <corocontact/partition/partition.hpp>
 
+#include <algorithm>
 #include <sstream>
 
 namespace coro {
@@ -24,6 +29,100 @@ void warn_if_open(const Tris& faces, const std::string& what, std::vector<std::s
             << " open, " << check.nonmanifold_edges << " non-manifold, " << check.misoriented_edges
             << " misoriented edges); contact tests points against it by the winding number only";
     warnings.push_back(message.str());
+}
+
+/// A box load is split over the nodes in its box; the share of a fixed node has no effect, so
+/// less force acts than the case says.
+void warn_about_loads_on_fixed_nodes(const Body& body, const BodySpec& spec, std::vector<std::string>& warnings)
+{
+    Vec3 lost = Vec3::Zero(), total = Vec3::Zero();
+    for (const BoxLoad& load : spec.loads)
+        total += load.force;
+    for (Index v = 0; v < body.num_vertices(); ++v)
+        if (body.fixed()[static_cast<std::size_t>(v)] != 0)
+            lost += body.load_forces().segment<3>(3 * v);
+    if (!(lost.stableNorm() > 1e-12 * total.stableNorm()))
+        return;
+    std::ostringstream message;
+    message << spec.location << ": body '" << spec.name << "': " << lost.stableNorm() << " of the "
+            << total.stableNorm() << " N of its [[body.load]] forces fall on fixed nodes and have no effect";
+    warnings.push_back(message.str());
+}
+
+/// Surface vertices obey the bound of mesh nodes (validate_and_orient): beyond it, contact's
+/// boxes, distances and areas overflow double.
+void check_surface_coordinates(const SurfaceMesh& surface, const std::string& what)
+{
+    for (Index v = 0; v < surface.vertices.rows(); ++v) {
+        const double largest = surface.vertices.row(v).cwiseAbs().maxCoeff();
+        CORO_CHECK(largest <= MAX_COORDINATE, InputError,
+                   what << ": vertex " << v << " has a coordinate of magnitude " << largest
+                        << ", expected at most " << MAX_COORDINATE << " (vertices counted from 0 in file order)");
+    }
+}
+
+/// A body whose every node lies behind a plane obstacle starts inside it: the penalty would
+/// throw it out with a force of its whole depth, almost surely a normal pointing the wrong way.
+void reject_bodies_behind(const CaseSpec& spec, const Scene& scene, const ObstacleSpec& plane, const Vec3& normal)
+{
+    for (std::size_t b = 0; b < scene.bodies.size(); ++b) {
+        const Positions& x = scene.bodies[b].mesh().rest_positions;
+        const Eigen::VectorXd height = (x.rowwise() - plane.point.transpose()) * normal;
+        if (height.maxCoeff() >= 0.0)
+            continue;
+        CORO_THROW(InputError, plane.location << ": plane obstacle: body '" << spec.bodies[b].name << "' ("
+                                              << spec.bodies[b].location << ") lies entirely behind the plane, "
+                                              << -height.maxCoeff() << " to " << -height.minCoeff()
+                                              << " behind it; bodies stay on the side the normal points to: check "
+                                                 "point and normal");
+    }
+}
+
+/// Static analysis solves K' u = f once per load step, and K' is singular when the fixed nodes
+/// (those of tets; nodes of no tet are fixed but hold nothing) leave a rigid motion free: none
+/// leaves all six, all on one line the rotation about it. Named here instead of as a solver
+/// breakdown later.
+void check_static_support(const Body& body, const BodySpec& spec, const std::vector<Index>& unused)
+{
+    std::vector<char> holds = body.fixed();
+    for (const Index v : unused)
+        holds[static_cast<std::size_t>(v)] = 0;
+    const Positions& rest = body.mesh().rest_positions;
+    std::vector<Index> fixed;
+    for (Index v = 0; v < static_cast<Index>(holds.size()); ++v)
+        if (holds[static_cast<std::size_t>(v)] != 0)
+            fixed.push_back(v);
+    const std::string who = spec.location + ": body '" + spec.name + "'";
+    const std::string remedy = "add a [[body.fixed]] box (nodes inside it do not move) that holds it, or "
+                               "use analysis = \"dynamic\"";
+    CORO_CHECK(!fixed.empty(), InputError,
+               who << ": static analysis, but no node of the body is fixed, so its rigid-body motion is "
+                      "unconstrained and there is no equilibrium to solve for; "
+                   << remedy);
+    // Collinear within a tolerance relative to the body's size: the farthest fixed node from
+    // the first spans the line, and no fixed node is off it.
+    const double size = (rest.colwise().maxCoeff() - rest.colwise().minCoeff()).norm();
+    const double tolerance = 1e-9 * size;
+    const Vec3 origin = rest.row(fixed.front()).transpose();
+    Vec3 direction = Vec3::Zero();
+    for (const Index v : fixed) {
+        const Vec3 d = rest.row(v).transpose() - origin;
+        if (d.norm() > direction.norm())
+            direction = d;
+    }
+    double off_line = 0.0;
+    if (direction.norm() > tolerance) {
+        const Vec3 axis = direction.normalized();
+        for (const Index v : fixed) {
+            const Vec3 d = rest.row(v).transpose() - origin;
+            off_line = std::max(off_line, (d - d.dot(axis) * axis).norm());
+        }
+    }
+    CORO_CHECK(off_line > tolerance, InputError,
+               who << ": static analysis, but its " << fixed.size() << " fixed node"
+                   << (fixed.size() == 1 ? " leaves" : "s lie on one line, which leaves")
+                   << " the rotation about " << (fixed.size() == 1 ? "it" : "that line")
+                   << " unconstrained, so there is no equilibrium to solve for; " << remedy);
 }
 
 } // namespace
@@ -66,13 +165,40 @@ TetMesh load_body_mesh(const BodySpec& spec, std::vector<std::string>& warnings)
     return mesh;
 }
 
-LoadedScene load_scene(const CaseSpec& spec)
+LoadedScene load_scene(const CaseSpec& spec, const LoadProgress& progress)
 {
-    LoadedScene loaded;
+    const auto report = [&](const std::string& stage) {
+        if (progress)
+            progress(stage);
+    };
+    // Generated bodies first: their size is known before anything is allocated.
+    double total_tets = 0.0;
     for (const BodySpec& body_spec : spec.bodies) {
+        const auto [tets, key] = detail::generated_tets(body_spec);
+        total_tets += tets;
+        if (tets > 0.0)
+            detail::check_memory(total_tets, body_spec.location + ": body '" + body_spec.name + "': " + key);
+    }
+    LoadedScene loaded;
+    for (std::size_t b = 0; b < spec.bodies.size(); ++b) {
+        const BodySpec& body_spec = spec.bodies[b];
+        const std::string which =
+            "body '" + body_spec.name + "' (" + std::to_string(b + 1) + " of " + std::to_string(spec.bodies.size()) + ")";
+        report(which + ": " +
+               (body_spec.shape == BodyShape::MESH ? "reading " + body_spec.mesh.filename().string() : "meshing"));
         const TetMesh mesh = load_body_mesh(body_spec, loaded.warnings);
+        if (body_spec.shape == BodyShape::MESH) {
+            total_tets += mesh.num_tets();
+            detail::check_memory(total_tets, body_spec.location + ": body '" + body_spec.name + "': mesh " +
+                                         body_spec.mesh.string() + " has " + std::to_string(mesh.num_tets()) +
+                                         " tets");
+        }
+        detail::check_magnitudes(spec, body_spec, mesh);
+        report(which + ": METIS parts and element set-up, " + std::to_string(mesh.num_tets()) +
+               (mesh.num_tets() == 1 ? " tet" : " tets"));
         Body body(mesh, body_spec, default_num_parts(mesh.num_tets(), spec.solver.parts_per_thread));
         if (!body_spec.surface.empty()) {
+            report(which + ": embedding " + body_spec.surface.filename().string());
             SurfaceMesh surface;
             try {
                 surface = read_surface(body_spec.surface);
@@ -80,33 +206,43 @@ LoadedScene load_scene(const CaseSpec& spec)
                 throw InputError(body_spec.location + ": body '" + body_spec.name + "': surface " +
                                  body_spec.surface.string() + ": " + error.what());
             }
-            warn_if_open(surface.faces,
-                         body_spec.location + ": body '" + body_spec.name + "': surface " +
-                             body_spec.surface.string(),
-                         loaded.warnings);
+            const std::string who =
+                body_spec.location + ": body '" + body_spec.name + "': surface " + body_spec.surface.string();
+            warn_if_open(surface.faces, who, loaded.warnings);
             body_spec.transform.apply(surface.vertices);
+            check_surface_coordinates(surface, who);
+            detail::reject_surface_far_outside(body.mesh(), surface, who);
             body.embed_surface(std::move(surface));
+            detail::check_embedding(body, who, loaded.warnings);
         }
         const std::vector<Index> unused = unreferenced_vertices(body.mesh());
+        if (spec.simulation.analysis == Analysis::STATIC)
+            check_static_support(body, body_spec, unused);
         for (const Index v : unused)
             body.fix_vertex(v);
         if (!unused.empty())
             loaded.warnings.push_back(body_spec.location + ": body '" + body_spec.name + "': " +
                                       std::to_string(unused.size()) +
                                       " nodes belong to no tet; they are held fixed");
+        warn_about_loads_on_fixed_nodes(body, body_spec, loaded.warnings);
         loaded.scene.bodies.push_back(std::move(body));
     }
     for (const ObstacleSpec& obstacle : spec.obstacles) {
         if (obstacle.type == ObstacleType::PLANE) {
-            loaded.scene.planes.push_back({obstacle.point, obstacle.normal.normalized()});
+            const Vec3 normal = obstacle.normal.normalized();
+            loaded.scene.planes.push_back({obstacle.point, normal});
+            if (spec.contact.enabled)
+                reject_bodies_behind(spec, loaded.scene, obstacle, normal);
             continue;
         }
+        report("obstacle: reading " + obstacle.mesh.filename().string());
         SurfaceMesh surface;
         try {
             surface = read_surface(obstacle.mesh);
         } catch (const InputError& error) {
             throw InputError(obstacle.location + ": obstacle mesh " + obstacle.mesh.string() + ": " + error.what());
         }
+        check_surface_coordinates(surface, obstacle.location + ": obstacle mesh " + obstacle.mesh.string());
         const SurfaceCheck check = check_surface(surface.faces);
         CORO_CHECK(check.closed_and_oriented(), InputError,
                    obstacle.location << ": obstacle mesh " << obstacle.mesh.string()

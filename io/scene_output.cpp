@@ -1,11 +1,14 @@
 #include <corocontact/io/scene_output.hpp>
 
+#include "detail/plane_patch.hpp"
+
 #include <corocontact/core/embedding.hpp>
 #include <corocontact/core/error.hpp>
+#include <corocontact/io/block_names.hpp>
 #include <corocontact/sim/scene_contact.hpp>
 
-#include <fstream>
 #include <iomanip>
+#include <limits>
 #include <sstream>
 
 namespace coro {
@@ -59,7 +62,7 @@ std::vector<FrameBlock> scene_frame(const Scene& scene)
         if (body.embedding().num_points() > 0) {
             // The embedded contact surface, where it is now, with its contact state.
             FrameBlock surface;
-            surface.name = body.name() + "_surface";
+            surface.name = surface_block_name(body.name());
             surface.points = embedded_positions(body.embedding(), as_positions(body.positions()));
             surface.tris = body.embedded_surface().faces;
             Eigen::MatrixXd s_inside = Eigen::MatrixXd::Zero(surface.points.rows(), 1), s_depth = s_inside;
@@ -75,10 +78,28 @@ std::vector<FrameBlock> scene_frame(const Scene& scene)
     }
     for (std::size_t k = 0; k < scene.obstacle_meshes.size(); ++k) {
         FrameBlock block;
-        block.name = "obstacle" + std::to_string(k);
+        block.name = obstacle_block_name(static_cast<Index>(k));
         block.points = scene.obstacle_meshes[k].vertices;
         block.tris = scene.obstacle_meshes[k].faces;
         blocks.push_back(std::move(block));
+    }
+    if (!scene.planes.empty()) {
+        // Planes are infinite: drawn over the scene's bounds at rest, the same in every frame.
+        Vec3 lo = Vec3::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
+        const auto extend = [&](const auto& points) {
+            if (points.rows() > 0) {
+                lo = lo.cwiseMin(points.colwise().minCoeff().transpose());
+                hi = hi.cwiseMax(points.colwise().maxCoeff().transpose());
+            }
+        };
+        for (const Body& body : scene.bodies)
+            extend(body.mesh().rest_positions);
+        for (const SurfaceMesh& mesh : scene.obstacle_meshes)
+            extend(mesh.vertices);
+        for (const PlaneObstacle& plane : scene.planes)
+            extend(plane.point.transpose());
+        for (std::size_t k = 0; k < scene.planes.size(); ++k)
+            blocks.push_back(detail::plane_patch(scene.planes[k], lo, hi, plane_block_name(static_cast<Index>(k))));
     }
     return blocks;
 }
@@ -92,6 +113,7 @@ std::string summary_json(const RunSummary& summary, const SummaryContext& contex
         << "  \"steps\": " << summary.steps << ",\n"
         << "  \"wall_s\": " << summary.wall_s << ",\n"
         << "  \"steps_per_s\": " << summary.steps_per_s << ",\n"
+        << "  \"setup_s\": " << context.setup_s << ",\n"
         << "  \"threads\": " << context.threads << ",\n"
         << "  \"bodies\": " << context.bodies << ",\n"
         << "  \"tets\": " << context.tets << ",\n"
@@ -107,29 +129,14 @@ std::string summary_json(const RunSummary& summary, const SummaryContext& contex
         << "  \"solves\": " << summary.solves << ",\n"
         << "  \"solves_not_converged\": " << summary.solves_not_converged << ",\n"
         << "  \"static_not_converged\": " << summary.static_not_converged << ",\n"
+        << "  \"static_iterations_mean\": " << summary.static_iterations_mean << ",\n"
+        << "  \"static_iterations_max\": " << summary.static_iterations_max << ",\n"
         << "  \"max_contact_depth\": " << summary.max_contact_depth << ",\n"
         << "  \"contacts_mean\": " << summary.contacts_mean << ",\n"
         << "  \"embree_disagreements\": " << summary.embree_disagreements << ",\n"
         << "  \"peak_rss_mb\": " << context.peak_rss_mb << "\n"
         << "}\n";
     return out.str();
-}
-
-void write_file_atomically(const std::filesystem::path& path, const std::string& text)
-{
-    std::filesystem::path temporary = path;
-    temporary += ".tmp";
-    {
-        std::ofstream file(temporary, std::ios::binary | std::ios::trunc);
-        CORO_CHECK(file.good(), InputError, temporary.string() << ": cannot open for writing");
-        file << text;
-        file.flush();
-        CORO_CHECK(file.good(), InputError, temporary.string() << ": write failed");
-    }
-    std::error_code error;
-    std::filesystem::rename(temporary, path, error);
-    CORO_CHECK(!error, InputError, path.string() << ": cannot rename from " << temporary.string() << ": "
-                                                 << error.message());
 }
 
 } // namespace coro

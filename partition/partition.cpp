@@ -44,7 +44,7 @@ double TetPartition::imbalance() const
 Index default_num_parts(Index num_tets, Index parts_per_thread)
 {
     const Index cores = static_cast<Index>(tbb::info::default_concurrency());
-    return std::max<Index>(1, std::min<Index>(parts_per_thread * cores, num_tets / 64));
+    return std::max<Index>(1, std::min<Index>(parts_per_thread * cores, num_tets / MIN_TETS_PER_PART));
 }
 
 TetPartition partition_tets(const Tets& tets, Index num_vertices, Index num_parts)

@@ -1,18 +1,25 @@
-// The corocontact command: run a case, describe a mesh.
-// Exit codes: 0 success, 2 bad input, 3 the simulation diverged.
+// The corocontact command: run a case, detect contacts, describe a mesh or a surface.
+// Exit codes: 0 success, 2 bad input, 3 the simulation diverged, 4 the output could not be
+// written (or its folder is in use by another run).
 
 #include "progress.hpp"
 
 #include <corocontact/config.hpp>
+#include <corocontact/core/atomic_file.hpp>
 #include <corocontact/core/error.hpp>
 #include <corocontact/core/surface_mesh.hpp>
+#include <corocontact/core/surface_topology.hpp>
 #include <corocontact/io/case_reader.hpp>
 #include <corocontact/io/mesh_readers.hpp>
+#include <corocontact/io/output_lock.hpp>
+#include <corocontact/io/run_files.hpp>
 #include <corocontact/io/scene_loader.hpp>
 #include <corocontact/io/scene_output.hpp>
+#include <corocontact/io/surface_readers.hpp>
 #include <corocontact/io/vtk_series.hpp>
 #include <corocontact/sim/checkpoint.hpp>
 #include <corocontact/sim/interrupt.hpp>
+#include <corocontact/sim/run_notes.hpp>
 #include <corocontact/sim/scene_contact.hpp>
 #if CORO_WITH_EMBREE
 #include <corocontact/embree/embree_detector.hpp>
@@ -22,23 +29,27 @@
 
 #include <CLI/CLI.hpp>
 #include <tbb/global_control.h>
-#include <tbb/info.h>
+#include <tbb/task_arena.h>
 
 #include <sys/resource.h>
 #include <unistd.h>
 
 #include <algorithm>
+#include <cctype>
 #include <charconv>
 #include <chrono>
 #include <csignal>
 #include <cstdio>
 #include <iostream>
+#include <limits>
 #include <memory>
+#include <set>
 
 namespace {
 
 constexpr int EXIT_BAD_INPUT = 2;
 constexpr int EXIT_DIVERGED = 3;
+constexpr int EXIT_OUTPUT_FAILED = 4;
 constexpr int EXIT_SIGNAL_BASE = 128; // stopped by signal s: exit 128 + s (130 SIGINT, 143 SIGTERM)
 
 double peak_rss_mb()
@@ -48,10 +59,40 @@ double peak_rss_mb()
     return static_cast<double>(usage.ru_maxrss) / 1024.0; // ru_maxrss is in KiB on Linux
 }
 
+/// A CLI11 check for a whole number in [min, max] that says so in plain words:
+/// "--threads: expected a whole number from 1 to 2147483647, found 'abc'".
+CLI::Validator whole_number(long long min, long long max)
+{
+    return CLI::Validator(
+        [min, max](std::string& text) -> std::string {
+            long long value = 0;
+            const char* end = text.data() + text.size();
+            const auto [stop, error] = std::from_chars(text.data(), end, value);
+            const std::string expected =
+                "expected a whole number from " + std::to_string(min) + " to " + std::to_string(max) + ", found '" +
+                text + "'";
+            if (text.empty() || error == std::errc::invalid_argument || stop != end)
+                return expected;
+            if (error == std::errc::result_out_of_range || value < min || value > max)
+                return expected;
+            return "";
+        },
+        min == 1 ? "POSITIVE" : "FROM " + std::to_string(min)); // --help: "INT:POSITIVE"
+}
+
+constexpr long long INDEX_MAX = std::numeric_limits<coro::Index>::max();
+
+/// The threads TBB runs at most: --threads (or all cores), but never more than the arena has.
+int threads_used()
+{
+    const auto allowed = tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism);
+    return static_cast<int>(
+        std::min<std::size_t>(allowed, static_cast<std::size_t>(tbb::this_task_arena::max_concurrency())));
+}
+
 struct RunOptions {
     std::string case_file;
     std::string out;
-    int threads = 0;
     long steps = 0;
     bool quiet = false;
     long checkpoint_every = 0;
@@ -70,31 +111,60 @@ const char* signal_name(int signal_number)
     return signal_number == SIGINT ? "SIGINT" : signal_number == SIGTERM ? "SIGTERM" : "a signal";
 }
 
+/// "1 body", "64 bodies".
+std::string count_of(std::size_t n, const char* one, const char* many)
+{
+    return std::to_string(n) + " " + (n == 1 ? one : many);
+}
+
 int run_case(const RunOptions& options)
 {
+    const auto setup_start = std::chrono::steady_clock::now();
+    coro::cli::Progress progress(!options.quiet, isatty(STDERR_FILENO) != 0);
     coro::CaseSpec spec = coro::read_case(options.case_file);
     if (!options.out.empty())
         spec.simulation.output_dir = options.out;
-    if (options.steps > 0)
-        spec.simulation.steps = static_cast<coro::Index>(options.steps);
+    if (options.steps > 0) {
+        CORO_CHECK(spec.simulation.analysis == coro::Analysis::DYNAMIC, InputError,
+                   "--steps " << options.steps << ": " << options.case_file
+                              << " is a static analysis, whose steps are simulation.load_steps; --steps sets the "
+                                 "time steps of a dynamic one");
+        spec.simulation.steps = static_cast<coro::Index>(options.steps); // the option's range is an Index's
+    }
+    const auto checkpoint_every = static_cast<coro::Index>(options.checkpoint_every);
+    // One run per output folder, claimed before the (possibly long) load; a run refused for bad
+    // input removes its lock file again, and the folder if it made it.
+    const std::filesystem::path& out_dir = spec.simulation.output_dir;
+    const coro::OutputLock lock(out_dir, "corocontact run " + options.case_file);
+    if (!lock.stale_owner().empty())
+        std::cerr << "warning: " << lock.path().string() << ": taking over the lock of a run that ended without "
+                  << "removing it (" << lock.stale_owner() << ")\n";
 
-    // Everything is loaded and checked before the output directory is touched.
-    coro::LoadedScene loaded = coro::load_scene(spec);
+    // Everything is loaded and checked before anything but the lock file is written there.
+    coro::LoadedScene loaded = coro::load_scene(spec, [&](const std::string& stage) { progress.status(stage); });
+    coro::Scene& scene = loaded.scene;
+    if (coro::contact_applies(spec))
+        progress.status("contact surfaces and their AABB trees");
+    coro::Simulation simulation(scene, spec);
+    progress.clear();
     for (const std::string& warning : loaded.warnings)
         std::cerr << "warning: " << warning << "\n";
-    coro::Scene& scene = loaded.scene;
+    if (const auto note = coro::contact_not_applied_note(spec))
+        std::cerr << *note << "\n";
+    if (!spec.contact.enabled && !spec.obstacles.empty())
+        std::cerr << "warning: " << spec.obstacles.front().location << ": the obstacles have no effect, because "
+                  << "contact.enabled is false (set enabled = true in [contact])\n";
 
-    const auto threads = static_cast<coro::Index>(
-        tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism));
+    const int threads = threads_used();
     if (!options.quiet)
         std::cerr << "corocontact " << CORO_VERSION << ": " << spec.simulation.name << ", "
-                  << scene.bodies.size() << " bodies, " << scene.num_tets() << " tets, "
-                  << scene.num_vertices() << " nodes, " << threads << " threads\n";
+                  << count_of(scene.bodies.size(), "body", "bodies") << ", " << scene.num_tets() << " tets, "
+                  << scene.num_vertices() << " nodes, " << count_of(static_cast<std::size_t>(threads), "thread", "threads")
+                  << "\n";
 
-    coro::Simulation simulation(scene, spec);
     const coro::Index last_step =
         spec.simulation.analysis == coro::Analysis::STATIC ? spec.simulation.load_steps : spec.simulation.steps;
-    const bool checkpoints = options.checkpoint_every > 0;
+    const bool checkpoints = checkpoint_every > 0;
     const std::uint64_t fingerprint =
         checkpoints || !options.restart.empty() ? coro::case_fingerprint(spec) : 0;
     coro::RunControl control;
@@ -124,12 +194,22 @@ int run_case(const RunOptions& options)
             std::cerr << "continuing from step " << state.step << " (" << options.restart << ")\n";
     }
 
-    coro::VtkSeriesWriter writer(spec.simulation.output_dir, spec.simulation.name);
+    // What an earlier run of this series left goes (a restart keeps its frames up to the
+    // checkpoint), so no old summary or frame stands beside this run's series.
+    const coro::RemovedFiles removed = coro::remove_earlier_run(out_dir, spec.simulation.name,
+                                                                options.restart.empty() ? -1 : control.resume_step,
+                                                                !options.restart.empty());
+    if (removed.files > 0 && !options.quiet)
+        std::cerr << "removed " << removed.files << " files (" << removed.frames << " frames) of an earlier run of "
+                  << spec.simulation.name << " from " << out_dir.string() << "\n";
+    coro::VtkSeriesWriter writer(out_dir, spec.simulation.name);
     for (const coro::FrameRecord& frame : frames)
         writer.adopt_frame(frame.step, frame.time);
-    const auto checkpoint_path = spec.simulation.output_dir / (spec.simulation.name + ".checkpoint");
+    if (!frames.empty())
+        writer.write_pvd();
+    const auto checkpoint_path = coro::checkpoint_path(out_dir, spec.simulation.name);
     if (checkpoints) {
-        control.checkpoint_every = static_cast<coro::Index>(options.checkpoint_every);
+        control.checkpoint_every = checkpoint_every;
         control.on_checkpoint = [&](coro::Index step, const coro::RunSummary& so_far) {
             coro::write_checkpoint(checkpoint_path, scene, {step, so_far, frames}, fingerprint);
         };
@@ -137,8 +217,9 @@ int run_case(const RunOptions& options)
     coro::install_stop_signal_handlers();
     control.stop = &coro::stop_signal();
 
-    coro::cli::Progress progress(!options.quiet, isatty(STDERR_FILENO) != 0);
     progress.set_first(control.resume_step);
+    const double setup_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - setup_start).count();
+    progress.start_steps();
     const coro::RunSummary summary = simulation.run(
         last_step,
         [&](coro::Index step, double time) {
@@ -151,16 +232,20 @@ int run_case(const RunOptions& options)
     coro::SummaryContext context;
     context.name = spec.simulation.name;
     context.threads = threads;
+    context.setup_s = setup_s;
     context.bodies = static_cast<coro::Index>(scene.bodies.size());
     context.tets = scene.num_tets();
     context.peak_rss_mb = peak_rss_mb();
-    const auto summary_path = spec.simulation.output_dir / (spec.simulation.name + ".summary.json");
+    const auto summary_path = coro::summary_path(out_dir, spec.simulation.name);
     coro::write_file_atomically(summary_path, coro::summary_json(summary, context));
 
     const auto& p = summary.phases;
     const double total = std::max(p.total(), 1e-300);
-    std::printf("%s: %d steps in %.3f s, %.2f steps/s, %d threads\n", spec.simulation.name.c_str(),
-                static_cast<int>(summary.steps), summary.wall_s, summary.steps_per_s, static_cast<int>(threads));
+    std::printf("%s: %s in %.3f s, %.2f steps/s, %s (set-up before the steps: %.3f s)\n",
+                spec.simulation.name.c_str(),
+                count_of(static_cast<std::size_t>(summary.steps), "step", "steps").c_str(), summary.wall_s,
+                summary.steps_per_s,
+                count_of(static_cast<std::size_t>(threads), "thread", "threads").c_str(), setup_s);
     std::printf("  phases [s]: rotation %.3f (%.0f%%), assembly %.3f (%.0f%%), solve %.3f (%.0f%%), "
                 "contact %.3f (%.0f%%), output %.3f (%.0f%%)\n",
                 p.rotation, 100 * p.rotation / total, p.assembly, 100 * p.assembly / total, p.solve,
@@ -168,16 +253,22 @@ int run_case(const RunOptions& options)
     std::printf("  PCG: %.1f iterations per solve, mean relative residual %.2e, %d of %d solves at the cap\n",
                 summary.cg_iterations_mean, summary.cg_residual_mean, static_cast<int>(summary.solves_not_converged),
                 static_cast<int>(summary.solves));
-    if (spec.contact.enabled) {
-        std::printf("  contact: %.1f vertices inside per step, max depth %.4g m", summary.contacts_mean,
-                    summary.max_contact_depth);
+    if (coro::contact_applies(spec)) {
+        std::printf("  contact: %.1f contact points per detection (vertex inside another body or obstacle, once "
+                    "per body), max depth %.4g m",
+                    summary.contacts_mean, summary.max_contact_depth);
         if (spec.contact.cross_check == coro::CrossCheck::EMBREE)
             std::printf(", Embree disagreements %d", static_cast<int>(summary.embree_disagreements));
         std::printf("\n");
     }
+    if (spec.simulation.analysis == coro::Analysis::STATIC)
+        std::printf("  Newton: %.1f iterations per load step, at most %d\n", summary.static_iterations_mean,
+                    static_cast<int>(summary.static_iterations_max));
     if (summary.static_not_converged > 0)
         std::printf("  warning: %d static load steps did not reach static_tolerance\n",
                     static_cast<int>(summary.static_not_converged));
+    if (const auto warning = coro::iteration_cap_warning(summary, spec.solver))
+        std::printf("  %s\n", warning->c_str());
     std::printf("  peak memory %.1f MB\n  series: %s\n  summary: %s\n", context.peak_rss_mb,
                 writer.pvd_path().string().c_str(), summary_path.string().c_str());
     if (checkpoints)
@@ -206,7 +297,7 @@ int detect_case(const DetectOptions& options)
     if (!options.mode.empty())
         spec.contact.mode = options.mode == "paper" ? coro::ContactMode::PAPER : coro::ContactMode::EXACT;
 #if !CORO_WITH_EMBREE
-    CORO_CHECK(options.cross_check.empty(), coro::InputError,
+    CORO_CHECK(options.cross_check.empty(), InputError,
                "--cross-check embree: this build has no Embree (configure with CORO_WITH_EMBREE=ON)");
 #endif
     coro::LoadedScene loaded = coro::load_scene(spec);
@@ -223,13 +314,23 @@ int detect_case(const DetectOptions& options)
     points.insert(points.end(), on_planes.begin(), on_planes.end());
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 
+    std::set<std::pair<coro::Index, coro::Index>> vertices_inside;
+    for (const coro::ContactPoint& point : points)
+        vertices_inside.emplace(point.body, point.vertex);
     std::FILE* report = options.csv == "-" ? stderr : stdout;
+    std::fprintf(report, "%s: %s, %s, %d vertex queries, %s mode, %.3f ms\n", spec.simulation.name.c_str(),
+                 count_of(surfaces.size(), "surface", "surfaces").c_str(),
+                 count_of(static_cast<std::size_t>(stats.pairs), "overlapping pair", "overlapping pairs").c_str(),
+                 stats.candidate_vertices, spec.contact.mode == coro::ContactMode::PAPER ? "paper" : "exact",
+                 1e3 * seconds);
     std::fprintf(report,
-                 "%s: %zu bodies, %d overlapping pairs, %d vertex queries, %d inside, %d on a surface, "
-                 "%d winding-number fallbacks, %d answered by a neighbour (clear-edge group), %s mode, %.3f ms\n",
-                 spec.simulation.name.c_str(), surfaces.size(), stats.pairs, stats.candidate_vertices, stats.inside,
-                 stats.on_surface, stats.winding_fallbacks, stats.by_neighbour,
-                 spec.contact.mode == coro::ContactMode::PAPER ? "paper" : "exact", 1e3 * seconds);
+                 "  %zu contact points at %zu vertices inside (a contact point: a surface vertex inside another body "
+                 "or obstacle, once per body it is inside)\n",
+                 points.size(), vertices_inside.size());
+    std::fprintf(report,
+                 "  %d vertices on a surface (counted outside), %d winding-number fallbacks, %d answered by a "
+                 "neighbour (clear-edge group)\n",
+                 stats.on_surface, stats.winding_fallbacks, stats.by_neighbour);
 
 #if CORO_WITH_EMBREE
     if (!options.cross_check.empty()) {
@@ -259,30 +360,80 @@ int detect_case(const DetectOptions& options)
     return 0;
 }
 
+/// "closed, consistently oriented, 1 piece, Euler characteristic 0, genus 1" or what is wrong,
+/// then the counts of open, non-manifold and misoriented edges and pinch vertices.
+std::string describe_topology(const coro::SurfaceTopology& t)
+{
+    const coro::SurfaceCheck& edges = t.edge_check;
+    std::string text = edges.open_edges == 0 && edges.nonmanifold_edges == 0 ? "closed" : "NOT closed";
+    text += edges.misoriented_edges == 0 ? ", consistently oriented" : ", NOT consistently oriented";
+    text += ", " + count_of(static_cast<std::size_t>(t.components), "piece", "pieces");
+    text += ", Euler characteristic " + std::to_string(t.euler_characteristic());
+    if (t.closed_oriented_manifold())
+        text += ", genus " + std::to_string(t.genus());
+    else
+        text += " (no genus: not a closed oriented 2-manifold)";
+    text += "\n    open edges " + std::to_string(edges.open_edges) + ", non-manifold edges " +
+            std::to_string(edges.nonmanifold_edges) + ", misoriented edges " + std::to_string(edges.misoriented_edges) +
+            ", pinch vertices " + std::to_string(t.nonmanifold_vertices);
+    return text;
+}
+
+void print_bounds(coro::CRef<coro::Positions> positions)
+{
+    const Eigen::RowVector3d lo = positions.colwise().minCoeff();
+    const Eigen::RowVector3d hi = positions.colwise().maxCoeff();
+    std::printf("  bounding box [%g, %g, %g] - [%g, %g, %g], size %g x %g x %g\n", lo[0], lo[1], lo[2], hi[0], hi[1],
+                hi[2], hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]);
+}
+
+/// `info` of an OBJ, STL or OFF surface.
+int describe_surface(const std::string& path)
+{
+    const coro::SurfaceMesh surface = coro::read_surface(path);
+    const coro::SurfaceTopology topology = coro::surface_topology(surface.faces);
+    std::printf("%s\n", path.c_str());
+    std::printf("  triangle surface: vertices %d (%d used by faces), edges %d, faces %d\n",
+                static_cast<int>(surface.vertices.rows()), topology.vertices, topology.edges, topology.faces);
+    print_bounds(surface.vertices);
+    std::printf("  surface %s\n", describe_topology(topology).c_str());
+    if (topology.closed_oriented_manifold()) {
+        const double volume = coro::enclosed_volume(surface.vertices, surface.faces);
+        std::printf("  enclosed volume %.9g, normals point %s\n", std::abs(volume),
+                    volume >= 0.0 ? "outward" : "inward (as an obstacle its faces are flipped at load)");
+    }
+    return 0;
+}
+
+bool is_surface_file(const std::string& path)
+{
+    std::string extension = std::filesystem::path(path).extension().string();
+    std::transform(extension.begin(), extension.end(), extension.begin(),
+                   [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+    return extension == ".obj" || extension == ".stl" || extension == ".off";
+}
+
+/// `info` of a tet mesh.
 int describe_mesh(const std::string& path, int parts)
 {
     coro::TetMesh mesh = coro::read_tet_mesh(path);
     const coro::Index reoriented = coro::validate_and_orient(mesh, path);
     const coro::Tris faces = coro::boundary_faces(mesh);
-    const coro::SurfaceCheck check = coro::check_surface(faces);
+    const coro::SurfaceTopology topology = coro::surface_topology(faces);
     double q_min = 1.0, q_sum = 0.0;
     for (coro::Index t = 0; t < mesh.num_tets(); ++t) {
         const double q = coro::mean_ratio_quality(mesh, t);
         q_min = std::min(q_min, q);
         q_sum += q;
     }
-    const Eigen::RowVector3d lo = mesh.rest_positions.colwise().minCoeff();
-    const Eigen::RowVector3d hi = mesh.rest_positions.colwise().maxCoeff();
     std::printf("%s\n", path.c_str());
-    std::printf("  nodes %d, tets %d, boundary faces %d, boundary nodes %zu\n", mesh.num_vertices(),
-                mesh.num_tets(), static_cast<int>(faces.rows()), coro::surface_vertices(faces).size());
-    std::printf("  volume %.9g, bounding box [%g, %g, %g] - [%g, %g, %g]\n", coro::total_volume(mesh),
-                lo[0], lo[1], lo[2], hi[0], hi[1], hi[2]);
+    std::printf("  tet mesh: nodes %d, tets %d, boundary faces %d, boundary nodes %d\n", mesh.num_vertices(),
+                mesh.num_tets(), topology.faces, topology.vertices);
+    std::printf("  volume %.9g\n", coro::total_volume(mesh));
+    print_bounds(mesh.rest_positions);
     std::printf("  quality (mean ratio, 1 = regular): min %.4f, mean %.4f\n", q_min, q_sum / mesh.num_tets());
     std::printf("  reoriented tets %d, nodes in no tet %zu\n", reoriented, coro::unreferenced_vertices(mesh).size());
-    std::printf("  surface %s (open edges %d, non-manifold edges %d, misoriented edges %d)\n",
-                check.closed_and_oriented() ? "closed and oriented" : "NOT closed and oriented",
-                check.open_edges, check.nonmanifold_edges, check.misoriented_edges);
+    std::printf("  boundary surface %s\n", describe_topology(topology).c_str());
     if (parts > 0) {
         const coro::TetPartition partition = coro::partition_tets(mesh.tets, mesh.num_vertices(), parts);
         const coro::PartLayout layout = coro::make_part_layout(mesh.tets, mesh.num_vertices(), partition);
@@ -306,19 +457,30 @@ int main(int argc, char** argv)
     app.set_version_flag("--version", std::string("corocontact ") + CORO_VERSION);
     app.require_subcommand(1);
     int threads = 0;
-    app.add_option("--threads", threads, "worker threads (default: all cores)")->check(CLI::PositiveNumber);
+    bool verbose = false;
+    const auto threads_option = [&](CLI::App* command) {
+        command->add_option("--threads", threads, "worker threads (default: all cores)")
+            ->check(whole_number(1, INDEX_MAX));
+    };
+    const auto verbose_flag = [&](CLI::App* command, const std::string& also) {
+        command->add_flag("--verbose", verbose,
+                          "error messages end in the source location that raised them (as with CORO_DEBUG=1)" + also);
+    };
+    threads_option(&app);
+    verbose_flag(&app, "");
 
     RunOptions run;
     CLI::App* run_command = app.add_subcommand("run", "simulate a case into a VTK series");
     run_command->add_option("case", run.case_file, "case file (.toml)")->required();
     run_command->add_option("--out", run.out, "output directory (overrides simulation.output_dir)");
-    run_command->add_option("--threads", threads, "worker threads (default: all cores)")->check(CLI::PositiveNumber);
+    threads_option(run_command);
+    verbose_flag(run_command, "");
     run_command->add_option("--steps", run.steps, "number of time steps (overrides simulation.steps)")
-        ->check(CLI::PositiveNumber);
+        ->check(whole_number(1, INDEX_MAX));
     run_command->add_flag("--quiet", run.quiet, "no progress output");
     run_command->add_option("--checkpoint-every", run.checkpoint_every,
                             "save the whole state to OUT/NAME.checkpoint every N steps (and at the end)")
-        ->check(CLI::PositiveNumber);
+        ->check(whole_number(1, INDEX_MAX));
     run_command->add_option("--restart", run.restart,
                             "continue the run saved in a checkpoint file of this case to its last step");
     run_command->set_version_flag("--version", std::string("corocontact ") + CORO_VERSION);
@@ -332,16 +494,18 @@ int main(int argc, char** argv)
     detect_command->add_option("--cross-check", detect.cross_check, "also detect with Embree and count disagreements")
         ->check(CLI::IsMember({"embree"}));
     detect_command->add_option("--csv", detect.csv, "write body,vertex,other,depth rows to FILE (- for stdout)");
-    detect_command->add_flag("--verbose", detect.verbose, "list the vertices on which Embree disagrees");
-    detect_command->add_option("--threads", threads, "worker threads (default: all cores)")->check(CLI::PositiveNumber);
+    verbose_flag(detect_command, "; with --cross-check, list the vertices on which Embree disagrees");
+    threads_option(detect_command);
     detect_command->set_version_flag("--version", std::string("corocontact ") + CORO_VERSION);
 
     std::string mesh_path;
-    CLI::App* info_command = app.add_subcommand("info", "counts, volume, quality and surface check of a mesh");
-    info_command->add_option("mesh", mesh_path, "tet mesh file")->required();
+    CLI::App* info_command = app.add_subcommand(
+        "info", "counts, bounds, volume, quality and topology of a tet mesh or a triangle surface (.obj, .stl, .off)");
+    info_command->add_option("mesh", mesh_path, "tet mesh or surface file")->required();
     int parts = 0;
-    info_command->add_option("--parts", parts, "also partition into K METIS parts: edge-cut and balance")
-        ->check(CLI::PositiveNumber);
+    info_command->add_option("--parts", parts, "tet mesh: also partition into K METIS parts: edge-cut and balance")
+        ->check(whole_number(1, INDEX_MAX));
+    verbose_flag(info_command, "");
     info_command->set_version_flag("--version", std::string("corocontact ") + CORO_VERSION);
 
     try {
@@ -351,19 +515,34 @@ int main(int argc, char** argv)
         return code == 0 ? 0 : EXIT_BAD_INPUT;
     }
 
+    if (verbose)
+        coro::set_source_locations_shown(true);
+    detect.verbose = verbose;
     std::unique_ptr<tbb::global_control> thread_limit;
-    if (threads > 0)
+    if (threads > 0) {
         thread_limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,
                                                              static_cast<std::size_t>(threads));
+        if (threads_used() < threads)
+            std::cerr << "note: --threads " << threads << ": this machine runs at most " << threads_used()
+                      << " threads at once; using " << threads_used() << "\n";
+    }
     try {
         if (run_command->parsed())
             return run_case(run);
         if (detect_command->parsed())
             return detect_case(detect);
+        if (is_surface_file(mesh_path)) {
+            CORO_CHECK(parts == 0, InputError,
+                       "--parts: " << mesh_path << " is a triangle surface; METIS parts are for tet meshes");
+            return describe_surface(mesh_path);
+        }
         return describe_mesh(mesh_path, parts);
     } catch (const coro::InputError& error) {
         std::cerr << "error: " << error.what() << "\n";
         return EXIT_BAD_INPUT;
+    } catch (const coro::OutputError& error) {
+        std::cerr << "error: " << error.what() << "\n";
+        return EXIT_OUTPUT_FAILED;
     } catch (const coro::NumericalError& error) {
         std::cerr << "error: the simulation diverged: " << error.what() << "\n";
         return EXIT_DIVERGED;

@@ -2,7 +2,7 @@
 """Render a corocontact result off screen to PNG: one frame, or a whole series (plus an animation).
 
     tools/render.sh OUT/NAME.pvd --last --array von_mises --out picture.png
-    tools/render.sh OUT/NAME.pvd --array velocity --out frames/      # NAME_0000.png ... + NAME.mp4
+    tools/render.sh OUT/NAME.pvd --array velocity --out frames/      # NAME_000000.png ... + NAME.mp4
     tools/render.sh OUT/NAME_000020.vtm --array contact_depth --fade 0.2 --view xy --edges
 
 Input: a .pvd series (every frame, or one with --frame K / --time T / --last) or a single .vtm,
@@ -34,6 +34,7 @@ import re
 import shutil
 import subprocess
 import sys
+import tempfile
 import xml.etree.ElementTree as ET
 
 PROG = "render.py"
@@ -102,7 +103,7 @@ def parse_args(argv):
                         "straddles 0, else viridis")
     p.add_argument("--out", metavar="PATH",
                    help="PNG file for one frame; a directory for a series (default: next to the "
-                        "input: NAME_<frame>.png, or the directory NAME_render/)")
+                        "input: NAME_<step>.png, the step of the frame shown, or the directory NAME_render/)")
     p.add_argument("--size", nargs=2, type=int, default=(1280, 800), metavar=("W", "H"),
                    help="image size in pixels (default 1280 800)")
     p.add_argument("--view", choices=VIEWS, default="iso", help="camera direction (default iso)")
@@ -174,11 +175,20 @@ def parse_args(argv):
 # Series and frames
 
 
+STEP_IN_NAME = re.compile(r"_(\d+)\.(vtm|vtu|vtp)$")
+
+
 class Frame:
     def __init__(self, index, time, files):
         self.index = index  # position in the series
         self.time = time    # simulated time, or None when unknown
         self.files = files  # one or more .vtm/.vtu/.vtp (several when the .pvd has parts)
+
+    def number(self):
+        """The number a PNG of this frame carries: the step of corocontact's NAME_<step>.vtm, so
+        NAME_000040.png shows NAME_000040.vtm; the position in the series for other files."""
+        m = STEP_IN_NAME.search(os.path.basename(self.files[0]))
+        return int(m.group(1)) if m else self.index
 
 
 def parse_pvd(path):
@@ -804,16 +814,21 @@ def filter_blocks(blocks, wanted, where):
 # Animation
 
 
-def make_animation(png_dir, stem, pattern, count, fps):
-    """NAME.mp4 with ffmpeg, else an animated GIF with Pillow, else a note. Returns a message."""
+def make_animation(png_dir, stem, names, fps):
+    """NAME.mp4 with ffmpeg, else an animated GIF with Pillow, else a note. Returns a message.
+    `names`: the PNGs in png_dir, in order (numbered by step, so not consecutive)."""
     ffmpeg = shutil.which("ffmpeg")
     if ffmpeg:
         out = os.path.join(png_dir, stem + ".mp4")
-        cmd = [ffmpeg, "-y", "-loglevel", "error", "-framerate", f"{fps:g}",
-               "-i", os.path.join(png_dir, pattern), "-frames:v", str(count),
-               "-vf", "pad=ceil(iw/2)*2:ceil(ih/2)*2,format=yuv420p",
-               "-c:v", "libx264", "-crf", "20", "-movflags", "+faststart", out]
-        r = subprocess.run(cmd, capture_output=True, text=True)
+        # ffmpeg reads an image sequence by consecutive numbers: link the PNGs as 0, 1, 2, ...
+        with tempfile.TemporaryDirectory(prefix="render_") as seq:
+            for i, name in enumerate(names):
+                os.symlink(os.path.abspath(os.path.join(png_dir, name)), os.path.join(seq, f"{i:06d}.png"))
+            cmd = [ffmpeg, "-y", "-loglevel", "error", "-framerate", f"{fps:g}",
+                   "-i", os.path.join(seq, "%06d.png"), "-frames:v", str(len(names)),
+                   "-vf", "pad=ceil(iw/2)*2:ceil(ih/2)*2,format=yuv420p",
+                   "-c:v", "libx264", "-crf", "20", "-movflags", "+faststart", out]
+            r = subprocess.run(cmd, capture_output=True, text=True)
         if r.returncode != 0 or not os.path.isfile(out):
             raise RuntimeError(f"{out}: ffmpeg failed: {r.stderr.strip() or r.returncode}")
         return f"wrote {out}"
@@ -823,7 +838,7 @@ def make_animation(png_dir, stem, pattern, count, fps):
         return ("no animation: neither ffmpeg nor Pillow is installed "
                 "(tools/render.sh --with-ffmpeg installs ffmpeg)")
     out = os.path.join(png_dir, stem + ".gif")
-    images = [Image.open(os.path.join(png_dir, pattern % i)).convert("RGB") for i in range(count)]
+    images = [Image.open(os.path.join(png_dir, name)).convert("RGB") for name in names]
     pal = [im.quantize(colors=255, method=Image.Quantize.MEDIANCUT) for im in images]
     pal[0].save(out, save_all=True, append_images=pal[1:], duration=int(round(1000 / fps)),
                 loop=0, optimize=True)
@@ -924,9 +939,9 @@ def run(args):
         out = args.out
         if out is None:
             base = os.path.splitext(os.path.abspath(src))[0]
-            out = base + (f"_{fr.index:04d}" if ext == ".pvd" else "") + ".png"
+            out = base + (f"_{fr.number():06d}" if ext == ".pvd" else "") + ".png"
         elif os.path.isdir(out):
-            out = os.path.join(out, f"{stem}_{fr.index:04d}.png")
+            out = os.path.join(out, f"{stem}_{fr.number():06d}.png")
         if not out.lower().endswith(".png"):
             raise InputError(out, "--out for one frame must be a .png file (or a directory)")
         parent = os.path.dirname(os.path.abspath(out))
@@ -947,8 +962,10 @@ def run(args):
         os.makedirs(out_dir, exist_ok=True)
     except OSError as e:
         raise InputError(out_dir, f"cannot create the output directory: {e.strerror}")
-    pattern = stem + "_%04d.png"
-    for i, fr in enumerate(chosen):
+    names = [f"{stem}_{fr.number():06d}.png" for fr in chosen]
+    if len(set(names)) != len(names):  # not corocontact's naming: number by position instead
+        names = [f"{stem}_{i:06d}.png" for i in range(len(chosen))]
+    for name, fr in zip(names, chosen):
         blocks = filter_blocks(first if fr is chosen[0] else read_frame(fr), wanted, fr.files[0])
         if fit == "frame":  # the camera follows the bodies
             fb = None
@@ -957,14 +974,15 @@ def run(args):
                     fb = union_bounds(fb, ds.GetBounds())
             scene.set_camera(fb or bounds)
         scene.show(blocks, fr.time)
-        scene.write(os.path.join(out_dir, pattern % i))
-    print(f"{PROG}: wrote {len(chosen)} PNGs to {out_dir}/{stem}_NNNN.png ({what})")
+        scene.write(os.path.join(out_dir, name))
+    print(f"{PROG}: wrote {len(chosen)} PNGs to {out_dir}/{stem}_<step>.png, numbered like the "
+          f"series' frames ({what})")
     if args.no_animation:
         return 0
     if len(chosen) < 2:
         print(f"{PROG}: no animation: the series has a single frame")
         return 0
-    print(f"{PROG}: {make_animation(out_dir, stem, pattern, len(chosen), args.fps)}")
+    print(f"{PROG}: {make_animation(out_dir, stem, names, args.fps)}")
     return 0
 
 

@@ -79,8 +79,15 @@ if colours < 20 or saturated < 0.005 * model.shape[0] * model.shape[1]:
 PY
 }
 check_png "$work/last.png" 480 320
-check_png "$work/frames/tiny_0000.png" 320 240
-check_png "$work/frames/tiny_$(printf %04d $((frames - 1))).png" 320 240
+# PNGs carry the step of the frame they show, as the series' files do (tiny_000002.vtm ->
+# tiny_000002.png).
+for vtm in "$work"/out/tiny_*.vtm; do
+  png="$work/frames/$(basename "$vtm" .vtm).png"
+  [ -f "$png" ] || fail "no $png for $vtm"
+done
+check_png "$work/frames/tiny_000000.png" 320 240
+last_vtm=$(ls "$work"/out/tiny_*.vtm | sort | tail -n 1)
+check_png "$work/frames/$(basename "$last_vtm" .vtm).png" 320 240
 
 # An unknown array is an input error: exit code 2 and the available arrays listed.
 set +e

@@ -2,20 +2,25 @@
 # Set up corocontact from nothing: install the missing Debian packages, configure and
 # build into build/. Non-interactive and idempotent; safe to run again.
 #
-#   tools/setup.sh [--build-type Release|Debug] [--no-build]
+#   tools/setup.sh [--build-type Release|Debug] [--no-build] [--target NAME]...
 #
+# --target NAME builds only that CMake target and what it needs (tools/run.sh builds
+# `corocontact`); without it everything is built, tests and benchmarks included.
 # Environment: CI=true turns warnings into errors (CORO_WARNINGS_AS_ERRORS=ON).
 set -euo pipefail
 
 root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 build_type=Release
 do_build=1
+targets=()
 while [ $# -gt 0 ]; do
   case "$1" in
     --build-type) build_type=$2; shift 2 ;;
     --no-build) do_build=0; shift ;;
-    -h|--help) sed -n 2,8p "${BASH_SOURCE[0]}"; exit 0 ;;
-    *) echo "setup.sh: unknown option '$1' (expected --build-type or --no-build)" >&2; exit 2 ;;
+    --target) [ $# -ge 2 ] || { echo "setup.sh: --target needs a target name" >&2; exit 2; }
+              targets+=(--target "$2"); shift 2 ;;
+    -h|--help) sed -n 2,9p "${BASH_SOURCE[0]}"; exit 0 ;;
+    *) echo "setup.sh: unknown option '$1' (expected --build-type, --no-build or --target)" >&2; exit 2 ;;
   esac
 done
 
@@ -24,6 +29,7 @@ packages=(
   libeigen3-dev libtbb-dev libmetis-dev libembree-dev
   libvtk9-dev libcli11-dev libtomlplusplus-dev
   libgtest-dev libgmock-dev libbenchmark-dev
+  petsc-dev libhypre-dev   # the AMG preconditioner (PETSc GAMG) and bench_amg's hypre
   calculix-ccx python3-matplotlib
   python3-vtk9 python3-numpy xvfb xauth libgl1-mesa-dri
 )
@@ -50,4 +56,4 @@ werror=OFF
 [ "${CI:-}" = "true" ] && werror=ON
 cmake -S "$root" -B "$root/build" -DCMAKE_BUILD_TYPE="$build_type" \
   -DCORO_WARNINGS_AS_ERRORS="$werror" >/dev/null
-cmake --build "$root/build" -j "$(nproc)"
+cmake --build "$root/build" -j "$(nproc)" "${targets[@]}"

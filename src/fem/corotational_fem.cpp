@@ -11,7 +11,6 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
-#include <chrono>
 #include <cstdint>
 #include <cmath>
 #include <numeric>
@@ -171,7 +170,6 @@ CorotationalFem::CorotationalFem(const TetMesh& mesh, const Material& material, 
     build_csr(block_pairs, static_cast<Index>(m_columns.size()), block_offsets_all, block_entries_all);
     m_interface_block_offsets.push_back(0);
     for (Index k = m_row_offsets[at(first_interface)]; k < static_cast<Index>(m_columns.size()); ++k) {
-        m_interface_blocks.push_back(k);
         for (Index e = block_offsets_all[at(k)]; e < block_offsets_all[at(k) + 1]; ++e)
             m_interface_block_entries.push_back(block_entries_all[at(e)]);
         m_interface_block_offsets.push_back(static_cast<Index>(m_interface_block_entries.size()));
@@ -179,7 +177,7 @@ CorotationalFem::CorotationalFem(const TetMesh& mesh, const Material& material, 
     build_csr(force_pairs, n_vertices - first_interface, m_interface_force_offsets, m_interface_force_entries);
 }
 
-void CorotationalFem::part_pass(Index part, const Pass& pass)
+void CorotationalFem::element_part(Index part, const Pass& pass)
 {
     const Index t_begin = m_layout.tet_offsets[at(part)], t_end = m_layout.tet_offsets[at(part) + 1];
     const Index r_begin = m_layout.node_offsets[at(part)], r_end = m_layout.node_offsets[at(part) + 1];
@@ -207,27 +205,18 @@ void CorotationalFem::part_pass(Index part, const Pass& pass)
         return;
     }
     // Rotations and assembly in one pass: a chunk of tets is rotated, then assembled while its
-    // data is still in cache. Each half is timed, so the pass can tell how its time splits.
+    // data is still in cache.
     Pass rotate_only;
     rotate_only.x = pass.x;
     rotate_only.rotate = true;
     Pass assemble_only = pass;
     assemble_only.rotate = false;
     const Slots no_outputs{nullptr, nullptr, nullptr, nullptr};
-    using Clock = std::chrono::steady_clock;
-    Clock::duration rotation{}, assembly{};
-    Clock::time_point tick = Clock::now();
     for (Index chunk = t_begin; chunk < t_end; chunk += FUSED_CHUNK) {
         const Index chunk_end = std::min(chunk + FUSED_CHUNK, t_end);
         tet_range(chunk, chunk_end, rotate_only, no_outputs);
-        const Clock::time_point rotated = Clock::now();
-        rotation += rotated - tick;
         tet_range(chunk, chunk_end, assemble_only, slots);
-        tick = Clock::now();
-        assembly += tick - rotated;
     }
-    m_part_seconds[at(part)] = {std::chrono::duration<double>(rotation).count(),
-                                std::chrono::duration<double>(assembly).count()};
 }
 
 void CorotationalFem::tet_range(Index t_begin, Index t_end, const Pass& pass, const Slots& slots)
@@ -341,64 +330,61 @@ void CorotationalFem::tet_pack(Index first, int count, const Pass& pass, const S
 }
 #endif
 
-void CorotationalFem::reduce_interfaces(const Pass& pass)
+void CorotationalFem::finish_rows(Index row_begin, Index row_end, const Pass& pass)
 {
     const Index first_interface = m_layout.first_interface_node();
+    const Index begin = std::max(row_begin, first_interface);
     if (pass.matrix) {
         BsrMatrix& matrix = *pass.matrix;
-        const auto n_blocks = static_cast<Index>(m_interface_blocks.size());
-        tbb::parallel_for(tbb::blocked_range<Index>(0, n_blocks, ROW_GRAIN), [&](const tbb::blocked_range<Index>& range) {
-            for (Index b = range.begin(); b != range.end(); ++b) {
+        // Interface block b is block m_row_offsets[first_interface] + b of the matrix.
+        const Index first_block = m_row_offsets[at(first_interface)];
+        for (Index r = begin; r < row_end; ++r) {
+            for (Index k = m_row_offsets[at(r)]; k < m_row_offsets[at(r) + 1]; ++k) {
+                const Index b = k - first_block;
                 Block3 sum = Block3::Zero();
                 for (Index e = m_interface_block_offsets[at(b)]; e < m_interface_block_offsets[at(b) + 1]; ++e)
                     sum += Eigen::Map<const Block3>(m_block_buffer.data() + 9 * at(m_interface_block_entries[at(e)]));
-                matrix.block(m_interface_blocks[at(b)]) = sum;
+                matrix.block(k) = sum;
             }
-        });
-        for (Index r = first_interface; r < num_vertices(); ++r)
             matrix.block(matrix.diagonal(r)).diagonal().array() += pass.mass_scale * m_masses[r];
+        }
+        if (pass.fixed)
+            project_fixed_rows(row_begin, row_end, pass.fixed, matrix);
     }
     if (pass.forces) {
-        const Index n_nodes = num_vertices() - first_interface;
-        tbb::parallel_for(tbb::blocked_range<Index>(0, n_nodes, ROW_GRAIN), [&](const tbb::blocked_range<Index>& range) {
-            for (Index v = range.begin(); v != range.end(); ++v) {
-                Vec3 sum = Vec3::Zero();
-                for (Index e = m_interface_force_offsets[at(v)]; e < m_interface_force_offsets[at(v) + 1]; ++e)
-                    sum += Eigen::Map<const Vec3>(m_force_buffer.data() + 3 * at(m_interface_force_entries[at(e)]));
-                Eigen::Map<Vec3>(pass.forces + 3 * static_cast<std::ptrdiff_t>(first_interface + v)) = sum;
-            }
-        });
+        for (Index r = begin; r < row_end; ++r) {
+            const Index v = r - first_interface;
+            Vec3 sum = Vec3::Zero();
+            for (Index e = m_interface_force_offsets[at(v)]; e < m_interface_force_offsets[at(v) + 1]; ++e)
+                sum += Eigen::Map<const Vec3>(m_force_buffer.data() + 3 * at(m_interface_force_entries[at(e)]));
+            Eigen::Map<Vec3>(pass.forces + 3 * static_cast<std::ptrdiff_t>(r)) = sum;
+        }
     }
 }
 
 void CorotationalFem::run_pass(const Pass& pass)
 {
-    for_each_part(m_layout.num_parts, [&](Index part) { part_pass(part, pass); });
-    reduce_interfaces(pass);
+    for_each_part(m_layout.num_parts, [&](Index part) { element_part(part, pass); });
+    if (!pass.matrix && !pass.forces)
+        return;
+    tbb::parallel_for(tbb::blocked_range<Index>(0, num_vertices(), ROW_GRAIN), [&](const tbb::blocked_range<Index>& rows) {
+        finish_rows(rows.begin(), rows.end(), pass);
+    });
 }
 
-void CorotationalFem::project_fixed(const std::vector<char>& fixed, BsrMatrix& matrix)
+void CorotationalFem::project_fixed_rows(Index row_begin, Index row_end, const char* fixed, BsrMatrix& matrix) const
 {
-    if (fixed.empty())
-        return;
-    // The blocks in rows or columns of fixed nodes are listed once per set of fixed nodes (a
-    // body's never changes), so a step touches only them instead of scanning the pattern.
-    if (fixed != m_projected_fixed) {
-        m_projected_fixed = fixed;
-        m_fixed_blocks.clear();
-        m_fixed_rows.clear();
-        for (Index r = 0; r < num_vertices(); ++r) {
-            if (fixed[at(r)])
-                m_fixed_rows.push_back(r);
+    for (Index r = row_begin; r < row_end; ++r) {
+        if (fixed[r]) {
             for (Index k = m_row_offsets[at(r)]; k < m_row_offsets[at(r) + 1]; ++k)
-                if (fixed[at(r)] || fixed[at(m_columns[at(k)])])
-                    m_fixed_blocks.push_back(k);
+                matrix.block(k).setZero();
+            matrix.block(matrix.diagonal(r)) = Block3::Identity();
+            continue;
         }
+        for (Index k = m_row_offsets[at(r)]; k < m_row_offsets[at(r) + 1]; ++k)
+            if (fixed[m_columns[at(k)]])
+                matrix.block(k).setZero();
     }
-    for (const Index k : m_fixed_blocks)
-        matrix.block(k).setZero();
-    for (const Index r : m_fixed_rows)
-        matrix.block(matrix.diagonal(r)) = Block3::Identity();
 }
 
 void CorotationalFem::set_rotations(std::vector<Mat3> rotations)
@@ -414,7 +400,7 @@ void CorotationalFem::update_rotations(CRef<VecX> x)
     Pass pass;
     pass.x = x.data();
     pass.rotate = true;
-    for_each_part(m_layout.num_parts, [&](Index part) { part_pass(part, pass); });
+    run_pass(pass);
 }
 
 void CorotationalFem::internal_forces(CRef<VecX> x, Eigen::Ref<VecX> f)
@@ -432,8 +418,8 @@ void CorotationalFem::assemble(double stiffness_scale, double mass_scale, const 
     pass.matrix = &matrix;
     pass.stiffness_scale = stiffness_scale;
     pass.mass_scale = mass_scale;
+    pass.fixed = fixed.empty() ? nullptr : fixed.data();
     run_pass(pass);
-    project_fixed(fixed, matrix);
 }
 
 void CorotationalFem::assemble_with_forces(CRef<VecX> x, double stiffness_scale, double mass_scale,
@@ -445,13 +431,13 @@ void CorotationalFem::assemble_with_forces(CRef<VecX> x, double stiffness_scale,
     pass.matrix = &matrix;
     pass.stiffness_scale = stiffness_scale;
     pass.mass_scale = mass_scale;
+    pass.fixed = fixed.empty() ? nullptr : fixed.data();
     run_pass(pass);
-    project_fixed(fixed, matrix);
 }
 
-double CorotationalFem::rotate_and_assemble_with_forces(CRef<VecX> x, double stiffness_scale, double mass_scale,
-                                                        const std::vector<char>& fixed, BsrMatrix& matrix,
-                                                        Eigen::Ref<VecX> forces)
+void CorotationalFem::rotate_and_assemble_with_forces(CRef<VecX> x, double stiffness_scale, double mass_scale,
+                                                      const std::vector<char>& fixed, BsrMatrix& matrix,
+                                                      Eigen::Ref<VecX> forces)
 {
     Pass pass;
     pass.x = x.data();
@@ -460,18 +446,8 @@ double CorotationalFem::rotate_and_assemble_with_forces(CRef<VecX> x, double sti
     pass.matrix = &matrix;
     pass.stiffness_scale = stiffness_scale;
     pass.mass_scale = mass_scale;
-    m_part_seconds.assign(at(m_layout.num_parts), {0.0, 0.0});
-    const auto start = std::chrono::steady_clock::now();
-    for_each_part(m_layout.num_parts, [&](Index part) { part_pass(part, pass); });
-    const double loop_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    reduce_interfaces(pass);
-    project_fixed(fixed, matrix);
-    double rotation = 0.0, total = 0.0;
-    for (const auto& seconds : m_part_seconds) {
-        rotation += seconds[0];
-        total += seconds[0] + seconds[1];
-    }
-    return total > 0.0 ? loop_seconds * rotation / total : 0.0;
+    pass.fixed = fixed.empty() ? nullptr : fixed.data();
+    run_pass(pass);
 }
 
 double CorotationalFem::strain_energy(CRef<VecX> x) const

@@ -65,9 +65,18 @@ Body::Body(Partitioned&& partitioned, const BodySpec& spec)
             m_load_forces.segment<3>(3 * v) += share;
     }
     for (Index v = 0; v < n; ++v)
-        if (m_fixed[static_cast<std::size_t>(v)])
+        if (m_fixed[static_cast<std::size_t>(v)]) {
             m_velocities.segment<3>(3 * v).setZero();
+            ++m_num_fixed;
+        }
     m_system = m_fem.make_matrix();
+}
+
+void Body::fix_vertex(Index v)
+{
+    char& fixed = m_fixed[static_cast<std::size_t>(v)];
+    m_num_fixed += fixed ? 0 : 1;
+    fixed = 1;
 }
 
 void Body::embed_surface(SurfaceMesh surface)
@@ -81,6 +90,15 @@ void Body::project_fixed(Eigen::Ref<VecX> dofs) const
     for (std::size_t v = 0; v < m_fixed.size(); ++v)
         if (m_fixed[v])
             dofs.segment<3>(3 * static_cast<Eigen::Index>(v)).setZero();
+}
+
+double kinetic_energy(const Body& body)
+{
+    const VecX& masses = body.fem().lumped_masses();
+    double energy = 0.0;
+    for (Index i = 0; i < masses.size(); ++i)
+        energy += 0.5 * masses[i] * body.velocities().segment<3>(3 * i).squaredNorm();
+    return energy;
 }
 
 } // namespace coro

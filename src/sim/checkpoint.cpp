@@ -1,5 +1,6 @@
 #include <corocontact/sim/checkpoint.hpp>
 
+#include <corocontact/core/atomic_file.hpp>
 #include <corocontact/core/error.hpp>
 
 #include <array>
@@ -17,7 +18,7 @@ namespace {
 
 constexpr char MAGIC[8] = {'C', 'O', 'R', 'O', 'C', 'K', 'P', 'T'};
 constexpr char END[4] = {'E', 'N', 'D', '!'};
-constexpr std::uint32_t VERSION = 1;
+constexpr std::uint32_t VERSION = 2;
 
 std::uint64_t fnv1a(const char* data, std::size_t size)
 {
@@ -109,10 +110,10 @@ void put_summary(Writer& w, const RunSummary& s)
     w.put<std::int64_t>(s.steps);
     for (const double v : {s.wall_s, s.steps_per_s, s.phases.rotation, s.phases.assembly, s.phases.solve,
                            s.phases.contact, s.phases.output, s.cg_iterations_mean, s.cg_residual_mean,
-                           s.max_contact_depth, s.contacts_mean})
+                           s.max_contact_depth, s.contacts_mean, s.static_iterations_mean})
         w.put(v);
     for (const Index v : {s.solves, s.solves_not_converged, s.static_not_converged, s.detections,
-                          s.embree_disagreements, s.first_step})
+                          s.embree_disagreements, s.first_step, s.static_iterations_max})
         w.put<std::int64_t>(v);
 }
 
@@ -122,10 +123,10 @@ RunSummary get_summary(Reader& r)
     s.steps = static_cast<Index>(r.get<std::int64_t>("counters"));
     for (double* v : {&s.wall_s, &s.steps_per_s, &s.phases.rotation, &s.phases.assembly, &s.phases.solve,
                       &s.phases.contact, &s.phases.output, &s.cg_iterations_mean, &s.cg_residual_mean,
-                      &s.max_contact_depth, &s.contacts_mean})
+                      &s.max_contact_depth, &s.contacts_mean, &s.static_iterations_mean})
         *v = r.get<double>("counters");
     for (Index* v : {&s.solves, &s.solves_not_converged, &s.static_not_converged, &s.detections,
-                     &s.embree_disagreements, &s.first_step})
+                     &s.embree_disagreements, &s.first_step, &s.static_iterations_max})
         *v = static_cast<Index>(r.get<std::int64_t>("counters"));
     return s;
 }
@@ -189,19 +190,7 @@ void write_checkpoint(const fs::path& path, const Scene& scene, const Checkpoint
     w.put_bytes(END, sizeof END);
     w.put(fnv1a(w.bytes().data(), w.bytes().size()));
 
-    fs::path temporary = path;
-    temporary += ".tmp";
-    {
-        std::ofstream file(temporary, std::ios::binary | std::ios::trunc);
-        CORO_CHECK(file.good(), InputError, temporary.string() << ": cannot open for writing");
-        file.write(w.bytes().data(), static_cast<std::streamsize>(w.bytes().size()));
-        file.flush();
-        CORO_CHECK(file.good(), InputError, temporary.string() << ": write failed");
-    }
-    std::error_code error;
-    fs::rename(temporary, path, error);
-    CORO_CHECK(!error, InputError, path.string() << ": cannot rename from " << temporary.string() << ": "
-                                                 << error.message());
+    write_file_atomically(path, w.bytes());
 }
 
 CheckpointState read_checkpoint(const fs::path& path, Scene& scene, std::uint64_t fingerprint,

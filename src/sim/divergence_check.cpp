@@ -3,6 +3,7 @@
 #include <corocontact/core/error.hpp>
 
 #include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
 #include <tbb/parallel_reduce.h>
 
 #include <algorithm>
@@ -114,11 +115,18 @@ DivergenceFinding DivergenceCheck::find(const std::vector<Body>& bodies, std::si
     return find_in_body(bodies[b], m_limits, m_min_volumes[b]);
 }
 
-void DivergenceCheck::check(const std::vector<Body>& bodies) const
+void DivergenceCheck::check(const std::vector<Body>& bodies)
 {
+    // All bodies at once (a large body's tets split further inside find()), then the first
+    // finding in body order.
+    m_findings.resize(bodies.size());
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, bodies.size(), 1), [&](const tbb::blocked_range<std::size_t>& range) {
+        for (std::size_t b = range.begin(); b != range.end(); ++b)
+            m_findings[b] = find(bodies, b);
+    });
     for (std::size_t b = 0; b < bodies.size(); ++b) {
         const Body& body = bodies[b];
-        const DivergenceFinding finding = find(bodies, b);
+        const DivergenceFinding& finding = m_findings[b];
         if (finding.node >= 0)
             CORO_THROW(NumericalError, "body '" << body.name() << "': position of node " << finding.node
                                                 << " (mesh file order) is " << finding.volume_ratio);

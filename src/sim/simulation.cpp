@@ -2,9 +2,8 @@
 
 #include <corocontact/config.hpp>
 #include <corocontact/core/error.hpp>
-#include <corocontact/sim/contact_step.hpp>
 #include <corocontact/sim/divergence_check.hpp>
-#include <corocontact/sim/integrator.hpp>
+#include <corocontact/sim/run_notes.hpp>
 #include <corocontact/sim/scene_contact.hpp>
 #include <corocontact/sim/static_solver.hpp>
 
@@ -55,10 +54,26 @@ struct Simulation::EmbreeCheck {
 struct Simulation::EmbreeCheck {};
 #endif
 
-Simulation::Simulation(Scene& scene, const CaseSpec& spec)
-    : m_scene(scene), m_spec(spec), m_divergence(scene.bodies)
+namespace {
+// Seconds since `start`.
+double seconds_since(std::chrono::steady_clock::time_point start)
 {
-    if (!spec.contact.enabled)
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+void add_solve(const PcgResult& result, RunSummary& summary)
+{
+    ++summary.solves;
+    summary.cg_iterations_mean += result.iterations;
+    summary.cg_residual_mean += result.residual;
+    summary.solves_not_converged += result.converged ? 0 : 1;
+}
+} // namespace
+
+Simulation::Simulation(Scene& scene, const CaseSpec& spec)
+    : m_scene(scene), m_spec(spec), m_system(scene.bodies), m_divergence(scene.bodies)
+{
+    if (!contact_applies(spec))
         return;
     m_scene.surfaces = make_scene_surfaces(m_scene);
     if (spec.contact.cross_check == CrossCheck::EMBREE) {
@@ -75,7 +90,7 @@ Simulation::~Simulation() = default;
 
 void Simulation::detect(RunSummary& summary)
 {
-    if (!m_spec.contact.enabled)
+    if (!contact_applies(m_spec))
         return;
     ScopedTimer timer(summary.phases.contact);
     update_contact_surfaces(m_scene.bodies, m_scene.surfaces);
@@ -88,9 +103,9 @@ void Simulation::detect(RunSummary& summary)
             return std::tie(a.body, a.vertex, a.other) < std::tie(b.body, b.vertex, b.other);
         });
     }
-    m_response = contact_response(m_scene.bodies, m_scene.surfaces, m_scene.contacts, m_spec.contact,
-                                  m_spec.simulation.dt);
-    m_scene.contact_forces = m_response.forces;
+    m_response.compute(m_scene.bodies, m_scene.surfaces, m_scene.contacts, m_spec.contact, m_spec.simulation.dt,
+                       m_system.matrix());
+    m_scene.contact_forces = m_response.forces();
     ++summary.detections;
     summary.contacts_mean += static_cast<double>(m_scene.contacts.size());
     for (const ContactPoint& point : m_scene.contacts)
@@ -108,38 +123,25 @@ void Simulation::detect(RunSummary& summary)
 #endif
 }
 
-void Simulation::dynamic_step(RunSummary& summary)
+void Simulation::dynamic_step()
 {
-    const PcgSettings settings = pcg_settings(m_spec.solver);
-    if (m_spec.contact.enabled) {
-        for (const PcgResult& result : implicit_euler_step_with_contact(
-                 m_scene.bodies, m_response, m_spec.simulation.dt, m_spec.simulation.gravity, settings, summary.phases)) {
-            ++summary.solves;
-            summary.cg_iterations_mean += result.iterations;
-            summary.cg_residual_mean += result.residual;
-            summary.solves_not_converged += result.converged ? 0 : 1;
-        }
-        return;
+    static const std::vector<VecX> no_forces;
+    const double dt = m_spec.simulation.dt;
+    PhaseTimes& phases = m_totals.phases;
+    {
+        ScopedTimer timer(phases.rotation);
+        m_system.element_loop(dt);
     }
-    for (Body& body : m_scene.bodies) {
-        PcgResult result;
-        try {
-            result = implicit_euler_step(body, m_spec.simulation.dt, m_spec.simulation.gravity, settings,
-                                         summary.phases);
-        } catch (const NumericalError& error) {
-            const std::string what = error.what();
-            if (what.rfind("body '", 0) == 0)
-                throw;
-            CORO_THROW(NumericalError, "body '" << body.name() << "': " << what);
-        }
-        ++summary.solves;
-        summary.cg_iterations_mean += result.iterations;
-        summary.cg_residual_mean += result.residual;
-        summary.solves_not_converged += result.converged ? 0 : 1;
+    {
+        ScopedTimer timer(phases.assembly);
+        m_system.assemble(dt, m_spec.simulation.gravity, m_spec.contact.enabled ? m_response.forces() : no_forces);
     }
+    ScopedTimer timer(phases.solve);
+    add_solve(m_system.solve(pcg_settings(m_spec.solver)), m_totals);
+    m_system.advance(dt);
 }
 
-void Simulation::static_step(Index load_step, RunSummary& summary)
+void Simulation::static_step(Index load_step)
 {
     const PcgSettings settings = pcg_settings(m_spec.solver);
     const double factor = static_cast<double>(load_step) / m_spec.simulation.load_steps;
@@ -147,18 +149,83 @@ void Simulation::static_step(Index load_step, RunSummary& summary)
         StaticResult result;
         try {
             result = solve_static(body, factor, m_spec.simulation.gravity, settings, m_spec.solver.static_tolerance,
-                                  m_spec.solver.static_max_iterations, summary.phases);
+                                  m_spec.solver.static_max_iterations, m_totals.phases);
         } catch (const NumericalError& error) {
             const std::string what = error.what();
             if (what.rfind("body '", 0) == 0)
                 throw;
             CORO_THROW(NumericalError, "body '" << body.name() << "': " << what);
         }
-        ++summary.solves;
-        summary.cg_iterations_mean += result.cg_iterations;
-        summary.cg_residual_mean += result.residual;
-        summary.static_not_converged += result.converged ? 0 : 1;
+        m_totals.solves += result.solves;
+        m_totals.cg_iterations_mean += result.cg_iterations;
+        m_totals.cg_residual_mean += result.cg_residual_sum;
+        m_totals.solves_not_converged += result.solves_not_converged;
+        m_totals.static_not_converged += result.converged ? 0 : 1;
+        m_totals.static_iterations_mean += result.iterations;
+        m_totals.static_iterations_max = std::max(m_totals.static_iterations_max, result.iterations);
     }
+}
+
+double Simulation::time_of(Index step) const
+{
+    return m_spec.simulation.analysis == Analysis::STATIC
+               ? static_cast<double>(step) / static_cast<double>(m_spec.simulation.load_steps)
+               : static_cast<double>(step) * m_spec.simulation.dt;
+}
+
+void Simulation::start(Index resume_step, const RunSummary& resume)
+{
+    const auto start = std::chrono::steady_clock::now();
+    m_step = resume_step;
+    if (resume_step > 0) {
+        // The contact response of the saved state; its counters were taken when it was saved.
+        m_totals = resume;
+        RunSummary scratch;
+        detect(scratch);
+    } else {
+        m_totals = RunSummary{};
+        detect(m_totals);
+    }
+    m_totals.first_step = resume_step;
+    m_totals.stop_signal = 0;
+    m_totals.wall_s += seconds_since(start);
+}
+
+void Simulation::step()
+{
+    const auto start = std::chrono::steady_clock::now();
+    const Index step = m_step + 1;
+    try {
+        if (m_spec.simulation.analysis == Analysis::STATIC)
+            static_step(step);
+        else
+            dynamic_step();
+        m_divergence.check(m_scene.bodies);
+        detect(m_totals);
+    } catch (const NumericalError& error) {
+        // Solvers name what failed; add where the first NaN/Inf is, in mesh file numbering.
+        const std::string where = locate_non_finite(m_scene.bodies);
+        CORO_THROW(NumericalError, "step " << step << " (t = " << time_of(step) << "): " << error.what()
+                                           << (where.empty() ? "" : "; first non-finite value: " + where));
+    }
+    m_step = step;
+    m_totals.steps = step;
+    m_totals.wall_s += seconds_since(start);
+}
+
+RunSummary Simulation::summary() const
+{
+    RunSummary summary = m_totals;
+    summary.steps_per_s = summary.wall_s > 0.0 ? summary.steps / summary.wall_s : 0.0;
+    if (summary.solves > 0) {
+        summary.cg_iterations_mean /= summary.solves;
+        summary.cg_residual_mean /= summary.solves;
+    }
+    if (summary.detections > 0)
+        summary.contacts_mean /= summary.detections;
+    if (m_spec.simulation.analysis == Analysis::STATIC && summary.steps > 0)
+        summary.static_iterations_mean /= static_cast<double>(summary.steps) * static_cast<double>(m_scene.bodies.size());
+    return summary;
 }
 
 RunSummary Simulation::run(Index steps, const FrameCallback& on_frame, const ProgressCallback& on_progress,
@@ -167,82 +234,47 @@ RunSummary Simulation::run(Index steps, const FrameCallback& on_frame, const Pro
     const bool is_static = m_spec.simulation.analysis == Analysis::STATIC;
     const Index total = is_static ? m_spec.simulation.load_steps : steps;
     const Index every = is_static ? 1 : m_spec.simulation.output_every;
-    const auto time_of = [&](Index step) {
-        return is_static ? static_cast<double>(step) / total : step * m_spec.simulation.dt;
-    };
     const Index first = control.resume_step;
     CORO_CHECK(first == 0 || first < total, InputError,
                "the run to continue is at step " << first << ", but the case ends at step " << total
                                                  << " (expected a later last step; see --steps)");
-
-    RunSummary summary = first > 0 ? control.resume_summary : RunSummary{};
-    summary.first_step = first;
-    summary.stop_signal = 0;
-    const double wall_before = first > 0 ? summary.wall_s : 0.0;
-    const auto start = std::chrono::steady_clock::now();
-    const auto update_wall = [&] {
-        summary.wall_s = wall_before + std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    const auto timed = [&](double& phase, const auto& work) {
+        const auto start = std::chrono::steady_clock::now();
+        work();
+        const double seconds = seconds_since(start);
+        phase += seconds;
+        m_totals.wall_s += seconds;
     };
     const auto write_frame = [&](Index step) {
-        if (!on_frame)
-            return;
-        ScopedTimer timer(summary.phases.output);
-        on_frame(step, time_of(step));
+        if (on_frame)
+            timed(m_totals.phases.output, [&] { on_frame(step, time_of(step)); });
     };
     const auto checkpoint = [&](Index step) {
         if (control.checkpoint_every <= 0 || !control.on_checkpoint)
             return;
-        update_wall();
-        control.on_checkpoint(step, summary);
+        double unused = 0.0;
+        timed(unused, [&] { control.on_checkpoint(step, m_totals); });
     };
     const auto stop_requested = [&] { return control.stop != nullptr && control.stop->load() != 0; };
 
-    if (first > 0) {
-        // The contact response of the saved state; its counters were taken when it was saved.
-        RunSummary scratch;
-        detect(scratch);
-    } else {
-        detect(summary);
+    start(first, control.resume_summary);
+    if (first == 0)
         write_frame(0);
-    }
-    Index step = first;
     if (stop_requested())
-        summary.stop_signal = control.stop->load();
-    while (summary.stop_signal == 0 && step < total) {
-        ++step;
-        try {
-            if (is_static)
-                static_step(step, summary);
-            else
-                dynamic_step(summary);
-            m_divergence.check(m_scene.bodies);
-            detect(summary);
-        } catch (const NumericalError& error) {
-            // Solvers name what failed; add where the first NaN/Inf is, in mesh file numbering.
-            const std::string where = locate_non_finite(m_scene.bodies);
-            CORO_THROW(NumericalError, "step " << step << " (t = " << time_of(step) << "): " << error.what()
-                                               << (where.empty() ? "" : "; first non-finite value: " + where));
-        }
-        summary.steps = step;
+        m_totals.stop_signal = control.stop->load();
+    while (m_totals.stop_signal == 0 && m_step < total) {
+        step();
         if (stop_requested())
-            summary.stop_signal = control.stop->load();
-        const bool frame_due = step % every == 0 || step == total;
-        if (frame_due || summary.stop_signal != 0)
-            write_frame(step);
-        if (step % std::max<Index>(control.checkpoint_every, 1) == 0 || step == total || summary.stop_signal != 0)
-            checkpoint(step);
+            m_totals.stop_signal = control.stop->load();
+        const bool frame_due = m_step % every == 0 || m_step == total;
+        if (frame_due || m_totals.stop_signal != 0)
+            write_frame(m_step);
+        if (m_step % std::max<Index>(control.checkpoint_every, 1) == 0 || m_step == total || m_totals.stop_signal != 0)
+            checkpoint(m_step);
         if (on_progress)
-            on_progress(step, total);
+            on_progress(m_step, total);
     }
-    update_wall();
-    summary.steps_per_s = summary.wall_s > 0.0 ? summary.steps / summary.wall_s : 0.0;
-    if (summary.solves > 0) {
-        summary.cg_iterations_mean /= summary.solves;
-        summary.cg_residual_mean /= summary.solves;
-    }
-    if (summary.detections > 0)
-        summary.contacts_mean /= summary.detections;
-    return summary;
+    return summary();
 }
 
 } // namespace coro

@@ -4,7 +4,6 @@
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
-#include <tbb/parallel_reduce.h>
 
 #include <algorithm>
 #include <functional>
@@ -15,7 +14,7 @@
 namespace coro {
 
 namespace {
-constexpr Index SPMV_GRAIN = 256; // block rows per task (and per reduction leaf of multiply_dot)
+constexpr Index SPMV_GRAIN = 256; // block rows per task of the general product
 constexpr Index DEFAULT_CHUNK_ROWS = 1024; // upper storage without given chunks
 
 std::size_t at(Index i) { return static_cast<std::size_t>(i); }
@@ -131,73 +130,47 @@ void BsrMatrix::add_symmetric_part(Index row, Index column, const Mat3& value)
     block(k) += value;
 }
 
+void BsrMatrix::multiply_chunk(Index chunk, const double* xd, double* yd) const
+{
+    const Index begin = m_chunk_offsets[at(chunk)], end = m_chunk_offsets[at(chunk) + 1];
+    std::fill(yd + 3 * static_cast<std::ptrdiff_t>(begin), yd + 3 * static_cast<std::ptrdiff_t>(end), 0.0);
+    detail::upper_chunk_rows(m_values.data(), m_columns.data(), m_row_offsets.data(), xd, yd, begin, end);
+}
+
+void BsrMatrix::gather_chunk(Index chunk, const double* xd, double* yd) const
+{
+    for (Index row = m_chunk_offsets[at(chunk)]; row < m_chunk_offsets[at(chunk) + 1]; ++row) {
+        const Index first = m_gather_offsets[at(row)], last = m_gather_offsets[at(row) + 1];
+        if (first != last)
+            detail::gather_row(m_values.data(), m_gather_blocks.data(), first, last, xd,
+                               yd + 3 * static_cast<std::ptrdiff_t>(row));
+    }
+}
+
 void BsrMatrix::multiply_upper_chunks(const double* xd, double* yd) const
 {
     const auto n_chunks = static_cast<Index>(m_chunk_offsets.size()) - 1;
     tbb::parallel_for(tbb::blocked_range<Index>(0, n_chunks, 1), [&](const tbb::blocked_range<Index>& range) {
-        for (Index chunk = range.begin(); chunk != range.end(); ++chunk) {
-            const Index begin = m_chunk_offsets[at(chunk)], end = m_chunk_offsets[at(chunk) + 1];
-            std::fill(yd + 3 * static_cast<std::ptrdiff_t>(begin), yd + 3 * static_cast<std::ptrdiff_t>(end), 0.0);
-            detail::upper_chunk_rows(m_values.data(), m_columns.data(), m_row_offsets.data(), xd, yd, begin, end);
-        }
+        for (Index chunk = range.begin(); chunk != range.end(); ++chunk)
+            multiply_chunk(chunk, xd, yd);
     });
-}
-
-void BsrMatrix::gather_upper_row(const double* xd, double* yd, Index row) const
-{
-    const Index first = m_gather_offsets[at(row)], last = m_gather_offsets[at(row) + 1];
-    if (first != last)
-        detail::gather_row(m_values.data(), m_gather_blocks.data(), first, last, xd,
-                           yd + 3 * static_cast<std::ptrdiff_t>(row));
+    tbb::parallel_for(tbb::blocked_range<Index>(0, n_chunks, 1), [&](const tbb::blocked_range<Index>& range) {
+        for (Index chunk = range.begin(); chunk != range.end(); ++chunk)
+            gather_chunk(chunk, xd, yd);
+    });
 }
 
 void BsrMatrix::multiply(CRef<VecX> x, Eigen::Ref<VecX> y) const
 {
-    const double* values = m_values.data();
-    const Index* columns = m_columns.data();
-    const Index* offsets = m_row_offsets.data();
-    const double* xd = x.data();
-    double* yd = y.data();
     if (is_symmetric_upper()) {
-        multiply_upper_chunks(xd, yd);
-        tbb::parallel_for(tbb::blocked_range<Index>(0, num_block_rows(), SPMV_GRAIN),
-                          [&](const tbb::blocked_range<Index>& range) {
-                              for (Index r = range.begin(); r != range.end(); ++r)
-                                  gather_upper_row(xd, yd, r);
-                          });
+        multiply_upper_chunks(x.data(), y.data());
         return;
     }
     tbb::parallel_for(tbb::blocked_range<Index>(0, num_block_rows(), SPMV_GRAIN),
                       [&](const tbb::blocked_range<Index>& range) {
-                          multiply_rows(values, columns, offsets, xd, yd, range.begin(), range.end());
+                          multiply_rows(m_values.data(), m_columns.data(), m_row_offsets.data(), x.data(), y.data(),
+                                        range.begin(), range.end());
                       });
-}
-
-double BsrMatrix::multiply_dot(CRef<VecX> x, Eigen::Ref<VecX> y) const
-{
-    const double* values = m_values.data();
-    const Index* columns = m_columns.data();
-    const Index* offsets = m_row_offsets.data();
-    const double* xd = x.data();
-    double* yd = y.data();
-    const bool upper = is_symmetric_upper();
-    if (upper)
-        multiply_upper_chunks(xd, yd);
-    return tbb::parallel_deterministic_reduce(
-        tbb::blocked_range<Index>(0, num_block_rows(), SPMV_GRAIN), 0.0,
-        [&](const tbb::blocked_range<Index>& range, double acc) {
-            if (upper)
-                for (Index r = range.begin(); r != range.end(); ++r)
-                    gather_upper_row(xd, yd, r);
-            else
-                multiply_rows(values, columns, offsets, xd, yd, range.begin(), range.end());
-            double sum = 0.0;
-            for (std::ptrdiff_t i = 3 * static_cast<std::ptrdiff_t>(range.begin());
-                 i < 3 * static_cast<std::ptrdiff_t>(range.end()); ++i)
-                sum += xd[i] * yd[i];
-            return acc + sum;
-        },
-        std::plus<double>());
 }
 
 SparseMat BsrMatrix::to_sparse() const

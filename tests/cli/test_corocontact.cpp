@@ -119,14 +119,15 @@ TEST(CorocontactRun, MissingCaseFileExitsWithTwo)
 TEST(CorocontactRun, DivergenceExitsWithThreeAndKeepsReadableFrames)
 {
     const fs::path dir = coro::test::scratch_dir("cli_diverge");
+    // Thrown at its clamp at 1e6 m/s: step 1 turns its tets inside out. (Values whose products
+    // overflow double, such as gravity = 1e300 with dt = 1e20, are refused at load instead.)
     std::string text = SMALL_CASE;
-    text.replace(text.find("gravity = [0.0, -9.81, 0.0]"), 27, "gravity = [0.0, -1e300, 0.0]");
-    text.replace(text.find("dt = 0.01"), 9, "dt = 1e20");
+    text.replace(text.find("young = 1e5"), 11, "young = 1e5\nvelocity = [-1e6, 0.0, 0.0]");
     const fs::path case_file = coro::test::write_text(dir / "diverge.toml", text);
     const Outcome outcome = run("run " + case_file.string() + " --out " + (dir / "out").string(), dir);
     EXPECT_EQ(outcome.exit_code, 3);
     EXPECT_THAT(outcome.err, HasSubstr("step 1"));
-    EXPECT_THAT(outcome.err, HasSubstr("body 'block': ")); // which body's solve met the Inf
+    EXPECT_THAT(outcome.err, HasSubstr("body 'block': "));
     const std::vector<std::string> frames = listed_frames(dir / "out" / "diverge.pvd");
     ASSERT_EQ(frames.size(), 1u);
     vtkNew<vtkXMLMultiBlockDataReader> reader;
@@ -143,7 +144,7 @@ TEST(CorocontactRun, StepsAndThreadsOptions)
         run("run " + case_file.string() + " --steps 2 --threads 1 --quiet --out " + (dir / "o").string(), dir);
     ASSERT_EQ(outcome.exit_code, 0) << outcome.err;
     EXPECT_THAT(outcome.out, HasSubstr("2 steps"));
-    EXPECT_THAT(outcome.out, HasSubstr("1 threads"));
+    EXPECT_THAT(outcome.out, HasSubstr(", 1 thread ("));
     EXPECT_EQ(outcome.err, "");
     EXPECT_EQ(run("run " + case_file.string() + " --threads 0", dir).exit_code, 2);
     EXPECT_EQ(run("run", dir).exit_code, 2);
@@ -225,39 +226,95 @@ TEST(CorocontactRun, OneAndTwoThreadsWriteIdenticalFramesThroughAnImpact)
     EXPECT_THAT(summary, ::testing::Not(HasSubstr("\"max_contact_depth\": 0,")));
 }
 
+TEST(CorocontactRun, OneAndTwoThreadsWriteIdenticalFramesOfAPile)
+{
+    // Bodies stacked on a floor and against a wall, touching each other from the first steps:
+    // contact couples them into one system every step.
+    const fs::path dir = coro::test::scratch_dir("cli_threads_pile");
+    std::string text = R"toml([simulation]
+dt = 0.004
+steps = 45
+output_every = 15
+gravity = [0.0, -9.81, 0.0]
+[solver]
+max_iterations = 25
+tolerance = 1e-7
+[contact]
+enabled = true
+stiffness = 4e4
+damping = 20.0
+friction = 0.4
+[[obstacle]]
+type = "plane"
+point = [0.0, 0.0, 0.0]
+normal = [0.0, 1.0, 0.0]
+[[obstacle]]
+type = "plane"
+point = [-0.32, 0.0, 0.0]
+normal = [1.0, 0.0, 0.0]
+)toml";
+    for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j) {
+            const double x = -0.2 + 0.205 * i, y = 0.1 + 0.205 * j;
+            const std::string name = "b" + std::to_string(3 * i + j);
+            text += (i + j) % 2 == 0
+                        ? "[[body]]\nname = \"" + name + "\"\nshape = \"sphere\"\ncenter = [" + std::to_string(x) +
+                              ", " + std::to_string(y) + ", 0.0]\nradius = 0.105\nresolution = 3\n"
+                        : "[[body]]\nname = \"" + name + "\"\nshape = \"box\"\nmin = [" + std::to_string(x - 0.1) +
+                              ", " + std::to_string(y - 0.1) + ", -0.1]\nmax = [" + std::to_string(x + 0.1) + ", " +
+                              std::to_string(y + 0.1) + ", 0.1]\ncells = [2, 2, 2]\n";
+            text += "young = 2e4\ndensity = 500.0\n";
+        }
+    const fs::path case_file = coro::test::write_text(dir / "pile.toml", text);
+    std::string summary;
+    for (const char* threads : {"1", "2"}) {
+        const Outcome outcome = run("run " + case_file.string() + " --quiet --threads " + threads + " --out " +
+                                        (dir / ("t" + std::string(threads))).string(),
+                                    dir);
+        ASSERT_EQ(outcome.exit_code, 0) << outcome.err;
+        summary = outcome.out;
+    }
+    int compared = 0;
+    for (const auto& entry : fs::recursive_directory_iterator(dir / "t1")) {
+        if (!entry.is_regular_file() || entry.path().extension() == ".json")
+            continue;
+        EXPECT_EQ(slurp(entry.path()), slurp(dir / "t2" / fs::relative(entry.path(), dir / "t1"))) << entry.path();
+        ++compared;
+    }
+    EXPECT_EQ(compared, 1 + 4 + 4 * (9 + 2)); // pvd, 4 vtm, 4 × (9 bodies + 2 plane blocks) vtu
+    EXPECT_THAT(summary, HasSubstr("contact:"));
+    EXPECT_THAT(summary, ::testing::Not(HasSubstr("contact: 0.0 contact points")));
+}
+
 TEST(CorocontactRun, FramePointsKeepTheMeshFileNodeOrder)
 {
+    // A body large enough to be split into METIS parts (whose nodes are renumbered inside) is
+    // written in the input's node order: here the order in which make_box numbers them.
     const fs::path dir = coro::test::scratch_dir("cli_order");
-    const std::string mesh = std::string(CORO_TEST_DATA_DIR) + "/msh/cube_v22.msh";
-    const fs::path case_file = coro::test::write_text(dir / "order.toml", std::string(R"toml([simulation]
+    const fs::path case_file = coro::test::write_text(dir / "order.toml", R"toml([simulation]
 steps = 1
 [solver]
 parts_per_thread = 8
 [[body]]
 name = "cube"
-mesh = ")toml") + mesh + "\"\n");
+shape = "box"
+min = [0.0, 0.0, 0.0]
+max = [1.0, 0.5, 0.8]
+cells = [12, 12, 12]
+)toml");
     ASSERT_EQ(run("run " + case_file.string() + " --quiet --out " + (dir / "o").string(), dir).exit_code, 0);
     vtkNew<vtkXMLMultiBlockDataReader> reader;
     reader->SetFileName((dir / "o" / "order_000000.vtm").string().c_str());
     reader->Update();
     auto* grid = vtkUnstructuredGrid::SafeDownCast(vtkMultiBlockDataSet::SafeDownCast(reader->GetOutput())->GetBlock(0));
     ASSERT_NE(grid, nullptr);
-    // MSH 2.2 node lines "tag x y z" in file order.
-    std::ifstream file(mesh);
-    std::string line;
-    while (std::getline(file, line) && line.rfind("$Nodes", 0) != 0) {
-    }
-    long count = 0;
-    file >> count;
-    ASSERT_EQ(grid->GetNumberOfPoints(), count);
-    for (long i = 0; i < count; ++i) {
-        long tag = 0;
-        double p[3];
-        file >> tag >> p[0] >> p[1] >> p[2];
+    const coro::TetMesh input = coro::make_box(coro::Vec3(0.0, 0.0, 0.0), coro::Vec3(1.0, 0.5, 0.8), {12, 12, 12});
+    ASSERT_EQ(grid->GetNumberOfPoints(), input.num_vertices());
+    for (coro::Index i = 0; i < input.num_vertices(); ++i) {
         double q[3];
         grid->GetPoint(i, q);
         for (int d = 0; d < 3; ++d)
-            ASSERT_EQ(q[d], p[d]) << "node " << i;
+            ASSERT_EQ(q[d], input.rest_positions(i, d)) << "node " << i;
     }
     auto* partition = grid->GetCellData()->GetArray("partition");
     ASSERT_NE(partition, nullptr);
@@ -286,7 +343,7 @@ resolution = 10
 )toml");
     const Outcome outcome = run("detect " + case_file.string() + " --csv " + (dir / "out.csv").string(), dir);
     ASSERT_EQ(outcome.exit_code, 0) << outcome.err;
-    EXPECT_THAT(outcome.out, HasSubstr("1 overlapping pairs"));
+    EXPECT_THAT(outcome.out, HasSubstr("1 overlapping pair,"));
 
     std::set<long> ball_rows;
     std::istringstream csv(slurp(dir / "out.csv"));
@@ -380,7 +437,7 @@ TEST(CorocontactInfo, DescribesAMesh)
     const Outcome outcome = run(std::string("info ") + CORO_TEST_DATA_DIR + "/msh/cube_v41.msh", dir);
     ASSERT_EQ(outcome.exit_code, 0) << outcome.err;
     EXPECT_THAT(outcome.out, HasSubstr("nodes 76, tets 172"));
-    EXPECT_THAT(outcome.out, HasSubstr("closed and oriented"));
+    EXPECT_THAT(outcome.out, HasSubstr("closed, consistently oriented, 1 piece, Euler characteristic 2, genus 0"));
     const Outcome parts = run(std::string("info ") + CORO_TEST_DATA_DIR + "/msh/cube_v41.msh --parts 3", dir);
     ASSERT_EQ(parts.exit_code, 0) << parts.err;
     EXPECT_THAT(parts.out, HasSubstr("METIS parts 3: edge-cut"));
@@ -398,4 +455,84 @@ TEST(Corocontact, HelpAndVersion)
     EXPECT_THAT(outcome.out, HasSubstr("--threads"));
     EXPECT_EQ(run("info --version", dir).exit_code, 0);
     EXPECT_EQ(run("frobnicate", dir).exit_code, 2);
+}
+
+TEST(CorocontactRun, WarnsWhenSolvesStopAtTheCapUnlessToleranceIsZero)
+{
+    const fs::path dir = coro::test::scratch_dir("cli_cap");
+    std::string text = SMALL_CASE;
+    text.replace(text.find("max_iterations = 50"), 19, "max_iterations = 2");
+    const fs::path capped = coro::test::write_text(dir / "capped.toml", text);
+    Outcome outcome = run("run " + capped.string() + " --quiet --out " + (dir / "a").string(), dir);
+    ASSERT_EQ(outcome.exit_code, 0) << outcome.err;
+    EXPECT_THAT(outcome.out, HasSubstr("warning: 4 of 4 PCG solves stopped at solver.max_iterations = 2"));
+
+    text.replace(text.find("max_iterations = 2"), 18, "max_iterations = 2\ntolerance = 0");
+    const fs::path on_purpose = coro::test::write_text(dir / "on_purpose.toml", text);
+    outcome = run("run " + on_purpose.string() + " --quiet --out " + (dir / "b").string(), dir);
+    ASSERT_EQ(outcome.exit_code, 0) << outcome.err;
+    EXPECT_THAT(outcome.out, HasSubstr("2.0 iterations per solve"));
+    EXPECT_THAT(outcome.out, ::testing::Not(HasSubstr("warning")));
+}
+
+TEST(CorocontactRun, StaticAnalysisSaysItDoesNotApplyContact)
+{
+    // Two clamped blocks that overlap at rest: a dynamic run would find contact at once.
+    const fs::path dir = coro::test::scratch_dir("cli_static_contact");
+    const fs::path case_file = coro::test::write_text(dir / "pressed.toml", R"([simulation]
+analysis = "static"
+load_steps = 2
+
+[contact]
+enabled = true
+
+[[body]]
+name = "lower"
+shape = "box"
+min = [0.0, 0.0, 0.0]
+max = [2.0, 1.0, 1.0]
+cells = [4, 2, 2]
+[[body.fixed]]
+min = [-1.0, -1.0, -1.0]
+max = [1e-9, 2.0, 2.0]
+
+[[body]]
+name = "upper"
+shape = "box"
+min = [0.0, 0.8, 0.0]
+max = [2.0, 1.8, 1.0]
+cells = [4, 2, 2]
+[[body.fixed]]
+min = [-1.0, -1.0, -1.0]
+max = [1e-9, 2.0, 2.0]
+[[body.load]]
+min = [1.999, -1.0, -1.0]
+max = [3.0, 3.0, 3.0]
+force = [0.0, -1e3, 0.0]
+)");
+    const Outcome outcome = run("run " + case_file.string() + " --quiet --out " + (dir / "o").string(), dir);
+    ASSERT_EQ(outcome.exit_code, 0) << outcome.err;
+    EXPECT_THAT(outcome.err, HasSubstr("pressed.toml: note: contact.enabled = true is not applied in static analysis"));
+    EXPECT_THAT(outcome.out, HasSubstr("Newton:"));
+    EXPECT_THAT(outcome.out, ::testing::Not(HasSubstr("contact:")));
+    vtkNew<vtkXMLMultiBlockDataReader> reader;
+    reader->SetFileName((dir / "o" / "pressed_000002.vtm").string().c_str());
+    reader->Update();
+    auto* blocks = vtkMultiBlockDataSet::SafeDownCast(reader->GetOutput());
+    ASSERT_NE(blocks, nullptr);
+    for (unsigned b = 0; b < 2; ++b) {
+        auto* grid = vtkUnstructuredGrid::SafeDownCast(blocks->GetBlock(b));
+        ASSERT_NE(grid, nullptr);
+        for (const char* name : {"contact_inside", "contact_force"}) {
+            auto* array = grid->GetPointData()->GetArray(name);
+            ASSERT_NE(array, nullptr) << name;
+            for (int c = 0; c < array->GetNumberOfComponents(); ++c) {
+                EXPECT_EQ(array->GetRange(c)[0], 0.0) << name;
+                EXPECT_EQ(array->GetRange(c)[1], 0.0) << name;
+            }
+        }
+    }
+    const std::string summary = slurp(dir / "o" / "pressed.summary.json");
+    EXPECT_THAT(summary, HasSubstr("\"static_iterations_mean\""));
+    EXPECT_THAT(summary, HasSubstr("\"static_iterations_max\""));
 }

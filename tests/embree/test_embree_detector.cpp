@@ -183,7 +183,8 @@ TEST_P(EmbreeUnitCubeAxis, GeometricNormalFollowsWinding)
     }
 }
 
-INSTANTIATE_TEST_SUITE_P(Axes, EmbreeUnitCubeAxis, ::testing::Values(0, 1, 2));
+INSTANTIATE_TEST_SUITE_P(Axes, EmbreeUnitCubeAxis, ::testing::Values(0, 1, 2),
+                         [](const ::testing::TestParamInfo<int>& param_info) { return std::string(1, "XYZ"[param_info.param]); });
 
 TEST_F(EmbreeUnitCube, FarPointHasNoHitOnAnyAxis)
 {

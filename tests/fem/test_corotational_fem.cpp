@@ -300,8 +300,7 @@ TEST(CorotationalFem, FusedRotationAndAssemblyEqualsTwoPasses)
     CorotationalFem fused(mesh, test_material());
     BsrMatrix b = fused.make_matrix();
     VecX fb(x.size());
-    const double rotation_seconds = fused.rotate_and_assemble_with_forces(x, 0.3, 1.7, fixed, b, fb);
-    EXPECT_GE(rotation_seconds, 0.0);
+    fused.rotate_and_assemble_with_forces(x, 0.3, 1.7, fixed, b, fb);
     EXPECT_EQ(fused.rotations(), two_passes.rotations());
     EXPECT_EQ(b.values(), a.values());
     EXPECT_TRUE(fb == fa);

@@ -54,6 +54,9 @@ std::string test_name(const testing::TestParamInfo<Input>& info)
     return name;
 }
 
+/// What a failing test prints as its parameter: the file, not the struct's bytes.
+void PrintTo(const Input& input, std::ostream* os) { *os << input.file.string(); }
+
 class FuzzInput : public testing::TestWithParam<Input> {};
 
 TEST_P(FuzzInput, IsReadOrRejectedWithInputError)

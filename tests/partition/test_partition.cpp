@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <array>
 #include <map>
+#include <string>
 
 using namespace coro;
 using ::testing::HasSubstr;
@@ -60,7 +61,8 @@ TEST_P(PartitionTetsParts, CoversEveryTetOnceBalancedWithCorrectEdgeCut)
     }
 }
 
-INSTANTIATE_TEST_SUITE_P(Counts, PartitionTetsParts, ::testing::Values(1, 2, 3, 8, 16));
+INSTANTIATE_TEST_SUITE_P(Counts, PartitionTetsParts, ::testing::Values(1, 2, 3, 8, 16),
+                         [](const ::testing::TestParamInfo<Index>& param_info) { return "Parts" + std::to_string(param_info.param); });
 
 TEST(PartitionTets, SameMeshSamePartition)
 {
@@ -86,7 +88,7 @@ TEST(PartitionTets, RejectsZeroParts)
 TEST(DefaultNumParts, FollowsTetCountNotThreads)
 {
     EXPECT_EQ(default_num_parts(100, 4), 1);
-    EXPECT_EQ(default_num_parts(200, 4), 3); // at most one part per 64 tets
+    EXPECT_EQ(default_num_parts(3 * MIN_TETS_PER_PART, 4), 3); // at most one part per MIN_TETS_PER_PART tets
     const Index many = default_num_parts(1000000, 4);
     EXPECT_GE(many, 4);
     EXPECT_EQ(many % 4, 0); // 4 per core of the machine

@@ -5,7 +5,6 @@
 #include <corocontact/io/case_reader.hpp>
 #include <corocontact/io/surface_readers.hpp>
 #include <corocontact/io/scene_loader.hpp>
-#include <corocontact/sim/integrator.hpp>
 #include <corocontact/sim/simulation.hpp>
 
 #include <gtest/gtest.h>

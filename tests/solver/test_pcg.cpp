@@ -8,6 +8,8 @@
 #include <gtest/gtest.h>
 #include <tbb/task_arena.h>
 
+#include <string>
+
 using namespace coro;
 
 namespace {
@@ -47,7 +49,10 @@ TEST_P(PcgPreconditioners, SolvesToToleranceAgainstDirectSolve)
 }
 
 INSTANTIATE_TEST_SUITE_P(Kinds, PcgPreconditioners,
-                         ::testing::Values(PcgPreconditioner::JACOBI, PcgPreconditioner::BLOCK_JACOBI));
+                         ::testing::Values(PcgPreconditioner::JACOBI, PcgPreconditioner::BLOCK_JACOBI),
+                         [](const ::testing::TestParamInfo<PcgPreconditioner>& param_info) {
+                             return std::string(param_info.param == PcgPreconditioner::JACOBI ? "Jacobi" : "BlockJacobi");
+                         });
 
 TEST(PcgSolver, StopsAtIterationCapAndReportsIt)
 {

@@ -3,8 +3,10 @@
 /// @brief Exceptions and checking macros.
 ///
 /// Bad input (files, case TOML, meshes, options) throws InputError; the message gives the
-/// input location first (`path:line`, body, element), then the failed condition, then the
-/// source location. Non-finite numbers and degenerate elements throw NumericalError.
+/// input location first (`path:line`, body, element), then the failed condition. Non-finite
+/// numbers and degenerate elements throw NumericalError. For developers, the messages of
+/// CORO_CHECK and CORO_THROW can end in their source location (` [case_reader.cpp:353]`):
+/// see set_source_locations_shown().
 
 #include <sstream>
 #include <stdexcept>
@@ -18,6 +20,14 @@ public:
     using std::runtime_error::runtime_error;
 };
 
+/// The output could not be written (disk full, no permission, the output folder in use by
+/// another run): the command line maps it to exit code 4. The message names the path and the
+/// system's reason.
+class OutputError : public std::runtime_error {
+public:
+    using std::runtime_error::runtime_error;
+};
+
 /// A numerical failure (NaN, Inf, an inverted element): in a time loop it means divergence
 /// and maps to exit code 3.
 class NumericalError : public std::runtime_error {
@@ -25,8 +35,16 @@ public:
     using std::runtime_error::runtime_error;
 };
 
+/// Whether the messages of CORO_CHECK / CORO_THROW end in ` [file.cpp:line]`. Initially on
+/// when the environment variable CORO_DEBUG is set to anything but "" or "0", else off (users
+/// read the input location, not ours). Affects exceptions thrown after the call; thread-safe.
+void set_source_locations_shown(bool shown);
+/// The current setting of set_source_locations_shown().
+bool source_locations_shown();
+
 namespace detail {
-/// Builds "message (file:line)" for the macros below.
+/// Builds "message [file:line]" for the macros below, or returns `message` unchanged when
+/// source_locations_shown() is false.
 std::string with_source_location(const std::string& message, const char* file, int line);
 } // namespace detail
 

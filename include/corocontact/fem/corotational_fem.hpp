@@ -87,24 +87,41 @@ public:
     /// update_rotations(x), then assemble_with_forces(), in one pass over the tets: each part
     /// rotates a chunk of its tets and assembles it while its data is still in cache. The
     /// results are bit for bit those of the two calls.
-    /// @return the part of the element loop's wall time that went to the rotations (the loop's
-    ///         wall time split in proportion to the time each half took inside the parts) [s]
     /// @throws NumericalError naming the tet if its deformation gradient is not finite
-    double rotate_and_assemble_with_forces(CRef<VecX> x, double stiffness_scale, double mass_scale,
-                                           const std::vector<char>& fixed, BsrMatrix& matrix, Eigen::Ref<VecX> forces);
+    void rotate_and_assemble_with_forces(CRef<VecX> x, double stiffness_scale, double mass_scale,
+                                         const std::vector<char>& fixed, BsrMatrix& matrix, Eigen::Ref<VecX> forces);
+
+    /// One pass over the tets, for callers that schedule the parts themselves (a scene runs
+    /// the parts of all its bodies as one parallel loop): element_part() for every part, then
+    /// finish_rows() for every row.
+    struct ElementPass {
+        const double* x = nullptr;     ///< #3V positions [m]: read for rotations and forces
+        bool rotate = false;           ///< update R_e from x first (x required)
+        double* forces = nullptr;      ///< #3V output: internal forces f0 − K'x [N], or null
+        BsrMatrix* matrix = nullptr;   ///< output (from make_matrix): stiffness_scale·K' +
+                                       ///< mass_scale·M, or null
+        double stiffness_scale = 0.0;
+        double mass_scale = 0.0;
+        const char* fixed = nullptr;   ///< #V flags, non-zero for a fixed node whose matrix row
+                                       ///< and column become identity; null: none fixed
+    };
+
+    /// The tets of one part: rotations (pass.rotate), then their blocks and forces, written to
+    /// the part's interior rows and to the part's own buffers for interface rows. Distinct parts
+    /// may run in parallel; the result never depends on how they are scheduled.
+    /// @throws NumericalError naming the tet if its deformation gradient is not finite
+    void element_part(Index part, const ElementPass& pass);
+
+    /// After element_part() of every part: the rows [row_begin, row_end) completed — interface
+    /// rows summed from the part buffers in ascending part order with their mass added, rows and
+    /// columns of fixed nodes replaced by identity. Disjoint row ranges may run in parallel.
+    void finish_rows(Index row_begin, Index row_end, const ElementPass& pass);
 
     /// Von Mises stress of each tet in the co-rotated frame at positions `x` [Pa], #T.
     VecX von_mises_stress(CRef<VecX> x) const;
 
 private:
-    struct Pass {
-        const double* x = nullptr;    // #3V positions: rotations (if rotate) and forces
-        bool rotate = false;
-        double* forces = nullptr;     // #3V output, or null
-        BsrMatrix* matrix = nullptr;  // output, or null
-        double stiffness_scale = 0.0;
-        double mass_scale = 0.0;
-    };
+    using Pass = ElementPass;
     // Where a tet's contributions go: a target ≥ 0 is a matrix block or node of an interior
     // row, a target < 0 the interface buffer entry −1 − target.
     struct Slots {
@@ -124,13 +141,11 @@ private:
         }
     };
     void run_pass(const Pass& pass);
-    void part_pass(Index part, const Pass& pass);
     void tet_range(Index t_begin, Index t_end, const Pass& pass, const Slots& slots);
     void one_tet(Index t, const Pass& pass, const Slots& slots);
     // Tets first .. first + count − 1 (count ≤ 4) as one AVX2 pack (detail/tet_pack_kernel.hpp).
     void tet_pack(Index first, int count, const Pass& pass, const Slots& slots);
-    void reduce_interfaces(const Pass& pass);
-    void project_fixed(const std::vector<char>& fixed, BsrMatrix& matrix);
+    void project_fixed_rows(Index row_begin, Index row_end, const char* fixed, BsrMatrix& matrix) const;
 
     Tets m_tets;
     PartLayout m_layout;
@@ -158,18 +173,10 @@ private:
     std::vector<double> m_force_buffer;  // 3 per entry
     std::vector<Index> m_part_block_buffer_offsets; // #parts+1
     std::vector<Index> m_part_force_buffer_offsets; // #parts+1
-    std::vector<Index> m_interface_blocks;          // matrix block of each interface block
-    std::vector<Index> m_interface_block_offsets;   // into m_interface_block_entries
+    std::vector<Index> m_interface_block_offsets;   // per block of an interface row, into entries
     std::vector<Index> m_interface_block_entries;
     std::vector<Index> m_interface_force_offsets;   // per interface node, into entries
     std::vector<Index> m_interface_force_entries;
-    // Seconds each part spent on rotations and on the rest in the last fused pass.
-    std::vector<std::array<double, 2>> m_part_seconds;
-    // project_fixed's lists for the fixed-node flags it last saw: blocks in a row or column of
-    // a fixed node, and the fixed rows.
-    std::vector<char> m_projected_fixed;
-    std::vector<Index> m_fixed_blocks;
-    std::vector<Index> m_fixed_rows;
 };
 
 } // namespace coro

@@ -29,9 +29,14 @@ struct TetPartition {
 /// @throws InputError if num_parts < 1; NumericalError if METIS fails (its status is named)
 TetPartition partition_tets(const Tets& tets, Index num_vertices, Index num_parts);
 
+/// Fewest tets a part of a body should carry: a part is one task of the element loop, and a
+/// task of fewer tets costs more to schedule than its work. Smaller bodies stay in one part; a
+/// scene batches them into its work items (sim/scene_system.hpp).
+constexpr Index MIN_TETS_PER_PART = 2048;
+
 /// Default number of parts of a body: `parts_per_thread` × the machine's cores (the process's
 /// default TBB concurrency, which --threads does not change, so 1 and 2 threads partition
-/// alike and give identical results), at most one part per 64 tets, at least 1.
+/// alike and give identical results), at most one part per MIN_TETS_PER_PART tets, at least 1.
 Index default_num_parts(Index num_tets, Index parts_per_thread);
 
 } // namespace coro

@@ -53,8 +53,10 @@ public:
 
     /// #V flags, non-zero for a node held in place.
     const std::vector<char>& fixed() const { return m_fixed; }
+    /// Number of fixed nodes.
+    Index num_fixed() const { return m_num_fixed; }
     /// Marks node `v` fixed (it keeps its current position).
-    void fix_vertex(Index v) { m_fixed[static_cast<std::size_t>(v)] = 1; }
+    void fix_vertex(Index v);
     /// Constant external nodal forces from the box loads, #3V [N] (gravity is added by solvers).
     const VecX& load_forces() const { return m_load_forces; }
     VecX& load_forces() { return m_load_forces; }
@@ -94,6 +96,7 @@ private:
     VecX m_positions;
     VecX m_velocities;
     std::vector<char> m_fixed;
+    Index m_num_fixed = 0;
     VecX m_load_forces;
     double m_rayleigh_mass = 0.0;
     double m_rayleigh_stiffness = 0.0;
@@ -102,5 +105,8 @@ private:
     SurfaceMesh m_embedded_surface;
     Embedding m_embedding;
 };
+
+/// Kinetic energy ½ vᵀMv of a body [J].
+double kinetic_energy(const Body& body);
 
 } // namespace coro

@@ -36,10 +36,10 @@ struct SimulationSettings {
 /// `[solver]`
 struct SolverSettings {
     Index max_iterations = 100;        ///< PCG iteration cap per solve, ≥ 1
-    double tolerance = 1e-6;           ///< PCG relative residual, > 0
+    double tolerance = 1e-6;           ///< PCG relative residual, ≥ 0 (0: every solve runs the cap)
     Preconditioner preconditioner = Preconditioner::BLOCK_JACOBI;
     double static_tolerance = 1e-8;    ///< static: residual relative to the load, > 0
-    Index static_max_iterations = 50;  ///< static: co-rotation updates per load step, ≥ 1
+    Index static_max_iterations = 50;  ///< static: Newton iterations per load step, ≥ 1
     Index parts_per_thread = 4;        ///< METIS parts per thread (partitioned loops), ≥ 1
 };
 

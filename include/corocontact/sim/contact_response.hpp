@@ -17,6 +17,7 @@
 #include <corocontact/contact/detector.hpp>
 #include <corocontact/sim/body.hpp>
 #include <corocontact/sim/case_spec.hpp>
+#include <corocontact/solver/scene_matrix.hpp>
 
 #include <vector>
 
@@ -25,25 +26,40 @@ namespace coro {
 /// Speed [m/s] below which friction sticks (regularised Coulomb).
 constexpr double FRICTION_STICK_SPEED = 1e-3;
 
-/// What contact adds to one implicit Euler step of the scene.
-struct ContactResponse {
-    /// Per body, #3V: explicit contact forces at the step start (penalty) [N].
-    std::vector<VecX> forces;
-    /// A 3×3 term of the system matrix between node `row` of body `body_row` and node `col` of
-    /// body `body_col`, already scaled by h² or h.
-    struct Block {
-        Index body_row, row, body_col, col;
-        Mat3 value;
-    };
-    std::vector<Block> blocks; ///< in contact order, then share order (deterministic)
-};
+/// What contact adds to one implicit Euler step of the scene: explicit forces per body, and
+/// the coupling blocks of the scene matrix.
+class ContactResponse {
+public:
+    /// Builds the response of every contact point, in parallel over the contacts; every
+    /// contact writes its own slots, which are then added in contact order, so forces and blocks
+    /// never depend on the thread count. Buffers are kept between calls (no allocation once they
+    /// have held a step's contacts).
+    /// @param[in] bodies    the scene's bodies (velocities and fixed nodes are read)
+    /// @param[in] surfaces  surfaces of the bodies (same order), then of static obstacles
+    /// @param[in] contacts  detection output; other < 0 marks a plane obstacle (see plane_obstacle.hpp)
+    /// @param[in] dt        the step h [s]
+    /// @param[in,out] matrix  the scene matrix whose coupling() is refilled and finished;
+    ///                        blocks in rows or columns of fixed nodes are left out
+    void compute(const std::vector<Body>& bodies, const std::vector<ContactSurface>& surfaces,
+                 const std::vector<ContactPoint>& contacts, const ContactSettings& settings, double dt,
+                 SceneMatrix& matrix);
 
-/// Builds the response of every contact point.
-/// @param[in] surfaces  surfaces of the bodies (same order), then of static obstacles
-/// @param[in] contacts  detection output; other < 0 marks a plane obstacle (see plane_obstacle.hpp)
-/// @param[in] dt        the step h [s]
-ContactResponse contact_response(const std::vector<Body>& bodies, const std::vector<ContactSurface>& surfaces,
-                                 const std::vector<ContactPoint>& contacts, const ContactSettings& settings,
-                                 double dt);
+    /// Per body, #3V: explicit contact forces at the step start (penalty) [N]; empty before
+    /// the first compute().
+    const std::vector<VecX>& forces() const { return m_forces; }
+
+private:
+    /// A node carrying part of a contact point, with its barycentric coefficient.
+    struct Share {
+        Index body = 0;
+        Index node = 0;
+        double coefficient = 0.0;
+    };
+    std::vector<VecX> m_forces;
+    std::vector<Index> m_share_offsets; // #contacts+1 into m_shares
+    std::vector<Index> m_block_offsets; // #contacts+1 into the coupling entries
+    std::vector<Share> m_shares;
+    std::vector<Vec3> m_share_forces;   // force on each share's node [N]
+};
 
 } // namespace coro

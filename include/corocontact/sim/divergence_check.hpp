@@ -52,15 +52,16 @@ public:
     /// thread count (the lowest input index wins).
     DivergenceFinding find(const std::vector<Body>& bodies, std::size_t b) const;
 
-    /// Checks every body in order and throws for the first that diverged.
+    /// Checks every body (in parallel) and throws for the first, in body order, that diverged.
     /// @throws NumericalError "body 'left': element 123 (mesh file order) inverted beyond
     ///         recovery: det F = -3.8 (limit -3)", "... blown up: det F = 41 (limit 30)", or
     ///         "body 'left': position of node 7 (mesh file order) is nan"
-    void check(const std::vector<Body>& bodies) const;
+    void check(const std::vector<Body>& bodies);
 
 private:
     DivergenceLimits m_limits;
     std::vector<double> m_min_volumes;
+    std::vector<DivergenceFinding> m_findings; // check()'s per body, kept between calls
 };
 
 /// Where the first non-finite position or velocity is, for a message after a solver reported a

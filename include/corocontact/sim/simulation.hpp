@@ -11,6 +11,7 @@
 #include <corocontact/sim/contact_response.hpp>
 #include <corocontact/sim/divergence_check.hpp>
 #include <corocontact/sim/phase_times.hpp>
+#include <corocontact/sim/scene_system.hpp>
 #include <corocontact/solver/pcg.hpp>
 
 #include <atomic>
@@ -37,7 +38,8 @@ struct Scene {
 /// What a run measured (DESIGN.md, OUT/NAME.summary.json).
 struct RunSummary {
     Index steps = 0;               ///< time steps (dynamic) or load steps (static) done
-    double wall_s = 0.0;           ///< wall time of the loop, loading excluded [s]
+    double wall_s = 0.0;           ///< wall time of the steps, frames and checkpoints, loading
+                                   ///< excluded [s]
     double steps_per_s = 0.0;      ///< steps / wall_s
     PhaseTimes phases;             ///< seconds per phase
     double cg_iterations_mean = 0.0; ///< PCG iterations per solve
@@ -45,6 +47,8 @@ struct RunSummary {
     Index solves = 0;              ///< PCG solves done
     Index solves_not_converged = 0; ///< solves that stopped at the iteration cap
     Index static_not_converged = 0; ///< static load steps that missed static_tolerance
+    double static_iterations_mean = 0.0; ///< static: Newton iterations per load step and body
+    Index static_iterations_max = 0;     ///< static: the most Newton iterations of a load step
     double max_contact_depth = 0.0;  ///< deepest penetration seen by any detection [m]
     double contacts_mean = 0.0;      ///< inside vertices per detection
     Index detections = 0;            ///< detection passes (initial state and every step)
@@ -80,24 +84,44 @@ struct RunControl {
     RunSummary resume_summary;
 };
 
-/// Runs a scene as its case says.
+/// Runs a scene as its case says, all at once (run()) or step by step (start(), then step()).
 class Simulation {
 public:
-    /// @param[in,out] scene  bodies, advanced in place; must outlive the Simulation. With contact
-    ///                       enabled, its contact surfaces are built here.
-    /// @param[in] spec       settings (simulation, solver, contact); bodies are already in `scene`
+    /// @param[in,out] scene  bodies, advanced in place; must outlive the Simulation, and its
+    ///                       bodies must not be added or removed. With contact enabled, its
+    ///                       contact surfaces are built here.
+    /// @param[in] spec       settings (simulation, solver, contact); bodies are already in `scene`;
+    ///                       must outlive the Simulation
     /// @throws InputError if cross_check = "embree" and the build has no Embree
     Simulation(Scene& scene, const CaseSpec& spec);
 
-    /// Runs `steps` time steps (dynamic) or all load steps (static). Frame 0 is the initial
-    /// state; then every output_every-th step and the last (every load step when static).
-    /// With contact enabled, detection runs on the initial state and after every step.
-    /// After every step the bodies are checked for divergence (sim/divergence_check.hpp).
+    /// Runs up to step `steps` (dynamic) or all load steps (static): start(), then step()
+    /// until done or stopped. Frame 0 is the initial state; then every output_every-th step and
+    /// the last (every load step when static).
     /// @param[in] control  stop flag, checkpoints, restart (see RunControl)
-    /// @throws NumericalError prefixed with "step N (t = ...): " when the simulation diverges
+    /// @throws NumericalError as step()
     /// @throws InputError if control.resume_step is not below the last step
     RunSummary run(Index steps, const FrameCallback& on_frame, const ProgressCallback& on_progress,
                    const RunControl& control = {});
+
+    /// Detection on the current state, before the first step(): the contact response the first
+    /// step uses. After a restart (resume_step > 0) its counters are not added: `resume` holds
+    /// the counters so far, as a CheckpointCallback received them.
+    void start(Index resume_step = 0, const RunSummary& resume = {});
+
+    /// One time step (dynamic) or the next load step (static), the divergence check, and the
+    /// detection on the new state.
+    /// @throws NumericalError prefixed with "step N (t = ...): " when the simulation diverges
+    void step();
+
+    /// Steps done, those before a restart included.
+    Index steps_done() const { return m_step; }
+    /// Simulated time after steps_done() [s], or the load factor (static).
+    double time() const { return time_of(m_step); }
+    /// Simulated time (dynamic) or load factor (static) after step `step`.
+    double time_of(Index step) const;
+    /// The counters so far, means taken (see RunSummary).
+    RunSummary summary() const;
 
     ~Simulation();
     Simulation(const Simulation&) = delete;
@@ -105,16 +129,19 @@ public:
 
 private:
     void detect(RunSummary& summary);
-    void dynamic_step(RunSummary& summary);
-    void static_step(Index load_step, RunSummary& summary);
+    void dynamic_step();
+    void static_step(Index load_step);
 
     Scene& m_scene;
     const CaseSpec& m_spec;
     struct EmbreeCheck;
     std::unique_ptr<EmbreeCheck> m_embree; // cross-check scenes, when asked for
+    SceneSystem m_system;                  // the scene-wide implicit Euler step
     ContactResponse m_response;            // of the last detection, used by the next step
     DetectionScratch m_detection;          // detect_contacts' working memory, kept from step to step
     DivergenceCheck m_divergence;          // run after every step
+    Index m_step = 0;                      // steps done
+    RunSummary m_totals;                   // counters so far; *_mean fields hold sums
 };
 
 /// PCG settings from the case's [solver] table.

@@ -79,13 +79,23 @@ public:
     /// @param[out] y  #3N DOFs (must not alias x)
     void multiply(CRef<VecX> x, Eigen::Ref<VecX> y) const;
 
-    /// y = A x and, in the same pass, x·y (PCG's pᵀAp) with a fixed reduction tree
-    /// (tbb::parallel_deterministic_reduce over fixed row chunks): bitwise the same for any
-    /// thread count, and y bitwise equal to multiply().
-    /// @param[in] x   #3N DOFs
+    /// Upper storage: the product chunks' row boundaries, #chunks+1 (see symmetric_upper()).
+    const std::vector<Index>& chunk_offsets() const { return m_chunk_offsets; }
+    /// Upper storage: true if some stored block reaches from one chunk into a later one (its
+    /// mirror is then added by gather_chunk()).
+    bool has_gathers() const { return !m_gather_blocks.empty(); }
+
+    /// Upper storage, the product's first pass over one chunk: y_r = Σ A_rc x_c for the chunk's
+    /// rows r, with the mirrors A_crᵀ of blocks inside the chunk added to their rows. Chunks
+    /// may run in parallel; rows of other chunks are not touched.
+    /// @param[in] x   #3N DOFs (this matrix's node numbering)
     /// @param[out] y  #3N DOFs (must not alias x)
-    /// @return x·y (not checked for finiteness)
-    double multiply_dot(CRef<VecX> x, Eigen::Ref<VecX> y) const;
+    void multiply_chunk(Index chunk, const double* x, double* y) const;
+
+    /// Upper storage, the product's second pass: adds to the rows of one chunk the mirrors of
+    /// blocks stored in earlier chunks, in ascending source row. Runs after multiply_chunk() of
+    /// every chunk.
+    void gather_chunk(Index chunk, const double* x, double* y) const;
 
     /// The same matrix as an Eigen sparse matrix, every block (tests, reference paths).
     SparseMat to_sparse() const;
@@ -96,7 +106,6 @@ public:
 private:
     void check_pattern(bool upper);
     void multiply_upper_chunks(const double* x, double* y) const;
-    void gather_upper_row(const double* x, double* y, Index row) const;
 
     std::vector<Index> m_row_offsets{0};
     std::vector<Index> m_columns;

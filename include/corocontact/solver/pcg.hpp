@@ -1,8 +1,9 @@
 #pragma once
 /// @file pcg.hpp
-/// @brief Preconditioned conjugate gradients on a BsrMatrix, deterministic for any thread count.
+/// @brief Preconditioned conjugate gradients on a scene matrix, deterministic for any thread count.
 
 #include <corocontact/solver/bsr_matrix.hpp>
+#include <corocontact/solver/scene_matrix.hpp>
 
 #include <vector>
 
@@ -28,16 +29,21 @@ struct PcgResult {
 };
 
 /// A reusable PCG solver: keeps its work vectors and the preconditioner between solves.
-/// Each iteration makes three parallel passes: q = A p fused with pᵀq; x, r and z = M⁻¹r
-/// updated together with r·r and r·z; p = z + βp. Every reduction has a fixed tree, so the
-/// iterates are bitwise the same for any thread count.
+/// Each iteration makes three parallel passes over the scene's row chunks: q = A p with the
+/// chunks' partial pᵀq; x, r and z = M⁻¹r updated together with the partial r·r and r·z; p = z
+/// + βp. Every dot product adds the chunk partials in chunk order, so the iterates are bitwise
+/// the same for any thread count. Once its vectors have the scene's size, a solve allocates
+/// nothing.
 class PcgSolver {
 public:
     /// Solves A x = b for symmetric positive definite A, warm-started from the given x.
-    /// @param[in] a       #N×#N blocks, SPD
+    /// @param[in] a       the scene matrix, #N×#N blocks, SPD (its coupling finished)
     /// @param[in] b       #3N right-hand side
     /// @param[in,out] x   #3N initial guess on entry, solution on exit
     /// @throws NumericalError if a non-finite value appears (A not SPD, NaN in b)
+    PcgResult solve(const SceneMatrix& a, CRef<VecX> b, Eigen::Ref<VecX> x, const PcgSettings& settings);
+
+    /// Solves with one body's matrix (upper storage) as a scene of one body.
     PcgResult solve(const BsrMatrix& a, CRef<VecX> b, Eigen::Ref<VecX> x, const PcgSettings& settings);
 
 private:
@@ -45,15 +51,19 @@ private:
         double rr = 0.0; ///< r·r
         double rz = 0.0; ///< r·z
     };
-    void build_preconditioner(const BsrMatrix& a, PcgPreconditioner kind);
+    void build_preconditioner(const SceneMatrix& a, PcgPreconditioner kind);
     /// One fused pass over the nodes: either r = b − r (r holding A x) when `b` is given, or
-    /// x += αp, r −= αq; then z = M⁻¹ r, and r·r, r·z with a fixed reduction tree.
-    Sums residual_pass(const double* b, double alpha, double* x);
+    /// x += αp, r −= αq; then z = M⁻¹ r, and r·r, r·z summed per chunk, then in chunk order.
+    Sums residual_pass(const RowChunks& chunks, const double* b, double alpha, double* x);
+    /// Σ_c chunk_dots[c] in chunk order.
+    double sum_chunks(const std::vector<double>& chunk_dots) const;
 
     PcgPreconditioner m_kind = PcgPreconditioner::JACOBI;
     std::vector<Block3> m_inverse_blocks; // BLOCK_JACOBI: one per node
     VecX m_inverse_diagonal;              // JACOBI: one per DOF
     VecX m_r, m_z, m_p, m_q;
+    std::vector<double> m_chunk_dots;     // one partial per chunk
+    std::vector<Sums> m_chunk_sums;       // one pair of partials per chunk
 };
 
 } // namespace coro

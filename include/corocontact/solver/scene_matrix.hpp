@@ -1,0 +1,68 @@
+#pragma once
+/// @file scene_matrix.hpp
+/// @brief The system matrix of a whole scene: every body's own matrix on the block diagonal
+/// (pattern built once, values refilled in place) plus the contact coupling blocks.
+///
+/// The rows (nodes) of body b are the scene rows [offset(b), offset(b) + #V_b). The row chunks
+/// are the product chunks of the body matrices in body order (a small body is one chunk, a
+/// large body its METIS parts and interface pieces), so every reduction over the scene sums
+/// per-body partials in a fixed order: results never depend on the thread count.
+
+#include <corocontact/solver/bsr_matrix.hpp>
+#include <corocontact/solver/coupling_blocks.hpp>
+#include <corocontact/solver/row_chunks.hpp>
+
+#include <vector>
+
+namespace coro {
+
+/// Rows per task of the scene-wide loops: small bodies are grouped until a task holds this many.
+constexpr Index SCENE_TASK_ROWS = 1024;
+
+class SceneMatrix {
+public:
+    SceneMatrix() = default;
+
+    /// @param[in] bodies  the block-diagonal matrices in body order, each symmetric in upper
+    ///                    storage (BsrMatrix::symmetric_upper); they are referenced, not copied,
+    ///                    and must outlive this object (their values may change between uses)
+    /// @throws std::invalid_argument if a matrix is not in upper storage
+    explicit SceneMatrix(std::vector<const BsrMatrix*> bodies);
+
+    Index num_bodies() const { return static_cast<Index>(m_bodies.size()); }
+    Index num_block_rows() const { return m_chunks.num_rows(); }
+    Index num_dofs() const { return 3 * num_block_rows(); }
+    /// First scene row of body b.
+    Index offset(Index body) const { return m_offsets[static_cast<std::size_t>(body)]; }
+    const BsrMatrix& body_matrix(Index body) const { return *m_bodies[static_cast<std::size_t>(body)]; }
+    /// The row chunks (reduction leaves) and tasks of every scene-wide loop.
+    const RowChunks& chunks() const { return m_chunks; }
+    /// The body of chunk c.
+    Index chunk_body(Index chunk) const { return m_chunk_body[static_cast<std::size_t>(chunk)]; }
+
+    /// The contact coupling blocks (scene rows); call coupling().finish(chunks()) after filling.
+    CouplingBlocks& coupling() { return m_coupling; }
+    const CouplingBlocks& coupling() const { return m_coupling; }
+
+    /// y = A x, and for every chunk c the partial dot product Σ_{i in c} x_i y_i in
+    /// `chunk_dots[c]` (the caller adds them in chunk order).
+    /// @param[in] x            #3N scene DOFs
+    /// @param[out] y           #3N (must not alias x)
+    /// @param[out] chunk_dots  #chunks, or null when no dot product is wanted
+    void multiply(const double* x, double* y, double* chunk_dots) const;
+
+    /// The diagonal blocks A_rr of the rows of chunk c (body block plus coupling).
+    /// @param[out] out  one Block3 per row of the chunk
+    void diagonal_blocks(Index chunk, Block3* out) const;
+
+private:
+    std::vector<const BsrMatrix*> m_bodies;
+    std::vector<Index> m_offsets;       // #bodies+1
+    RowChunks m_chunks;
+    std::vector<Index> m_chunk_body;    // #chunks
+    std::vector<Index> m_chunk_local;   // #chunks: the chunk's index within its body matrix
+    bool m_any_gathers = false;         // some body has blocks reaching across its chunks
+    CouplingBlocks m_coupling;
+};
+
+} // namespace coro

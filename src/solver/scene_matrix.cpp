@@ -1,0 +1,83 @@
+#include <corocontact/solver/scene_matrix.hpp>
+
+#include <stdexcept>
+#include <string>
+
+namespace coro {
+
+namespace {
+std::size_t at(Index i) { return static_cast<std::size_t>(i); }
+} // namespace
+
+SceneMatrix::SceneMatrix(std::vector<const BsrMatrix*> bodies) : m_bodies(std::move(bodies))
+{
+    m_offsets.assign(1, 0);
+    for (std::size_t b = 0; b < m_bodies.size(); ++b) {
+        const BsrMatrix& matrix = *m_bodies[b];
+        if (!matrix.is_symmetric_upper())
+            throw std::invalid_argument("SceneMatrix: the matrix of body " + std::to_string(b) +
+                                        " is not in upper storage");
+        const std::vector<Index>& chunks = matrix.chunk_offsets();
+        for (std::size_t c = 0; c + 1 < chunks.size(); ++c) {
+            if (chunks[c + 1] == chunks[c])
+                continue; // the one empty chunk of a matrix without rows
+            m_chunks.append(chunks[c + 1] - chunks[c]);
+            m_chunk_body.push_back(static_cast<Index>(b));
+            m_chunk_local.push_back(static_cast<Index>(c));
+        }
+        m_any_gathers = m_any_gathers || matrix.has_gathers();
+        m_offsets.push_back(m_offsets.back() + matrix.num_block_rows());
+    }
+    m_chunks.group_tasks(SCENE_TASK_ROWS);
+    m_coupling.finish(m_chunks);
+}
+
+void SceneMatrix::multiply(const double* x, double* y, double* chunk_dots) const
+{
+    // Rows, coupling and dot of a chunk whose rows are complete after its own first pass.
+    const auto finish_chunk = [&](Index c, Index begin, Index end) {
+        m_coupling.multiply_add(c, x, y);
+        if (!chunk_dots)
+            return;
+        double sum = 0.0;
+        for (std::ptrdiff_t i = 3 * static_cast<std::ptrdiff_t>(begin); i < 3 * static_cast<std::ptrdiff_t>(end); ++i)
+            sum += x[i] * y[i];
+        chunk_dots[c] = sum;
+    };
+    for_each_chunk(m_chunks, [&](Index c, Index begin, Index end) {
+        const Index body = m_chunk_body[at(c)];
+        const std::ptrdiff_t shift = 3 * static_cast<std::ptrdiff_t>(m_offsets[at(body)]);
+        const BsrMatrix& matrix = *m_bodies[at(body)];
+        matrix.multiply_chunk(m_chunk_local[at(c)], x + shift, y + shift);
+        if (!matrix.has_gathers())
+            finish_chunk(c, begin, end);
+    });
+    if (!m_any_gathers)
+        return;
+    for_each_chunk(m_chunks, [&](Index c, Index begin, Index end) {
+        const Index body = m_chunk_body[at(c)];
+        const BsrMatrix& matrix = *m_bodies[at(body)];
+        if (!matrix.has_gathers())
+            return;
+        const std::ptrdiff_t shift = 3 * static_cast<std::ptrdiff_t>(m_offsets[at(body)]);
+        matrix.gather_chunk(m_chunk_local[at(c)], x + shift, y + shift);
+        finish_chunk(c, begin, end);
+    });
+}
+
+void SceneMatrix::diagonal_blocks(Index chunk, Block3* out) const
+{
+    const Index body = m_chunk_body[at(chunk)];
+    const BsrMatrix& matrix = *m_bodies[at(body)];
+    const Index begin = m_chunks.offsets[at(chunk)], end = m_chunks.offsets[at(chunk) + 1];
+    const Index offset = m_offsets[at(body)];
+    for (Index r = begin; r < end; ++r)
+        out[r - begin] = matrix.block(matrix.diagonal(r - offset));
+    for (Index k = m_coupling.chunk_begin(chunk); k < m_coupling.chunk_begin(chunk + 1); ++k) {
+        const CouplingBlocks::Entry& e = m_coupling.block(k);
+        if (e.row == e.column)
+            out[e.row - begin] += e.value;
+    }
+}
+
+} // namespace coro

@@ -1,0 +1,216 @@
+#include "near.hpp"
+
+#include <corocontact/solver/pcg.hpp>
+#include <corocontact/solver/scene_matrix.hpp>
+
+#include <Eigen/SparseCholesky>
+#include <gtest/gtest.h>
+#include <tbb/task_arena.h>
+
+#include <random>
+#include <stdexcept>
+
+using namespace coro;
+
+namespace {
+// A random symmetric positive definite matrix in upper storage (diagonally dominant).
+BsrMatrix random_spd_upper(Index n, unsigned seed, std::vector<Index> chunks)
+{
+    std::mt19937 rng(seed);
+    std::vector<Index> offsets{0}, columns;
+    for (Index r = 0; r < n; ++r) {
+        for (Index c = r; c < n; ++c)
+            if (c == r || rng() % 5 == 0)
+                columns.push_back(c);
+        offsets.push_back(static_cast<Index>(columns.size()));
+    }
+    BsrMatrix a = BsrMatrix::symmetric_upper(offsets, columns, std::move(chunks));
+    std::uniform_real_distribution<double> u(-1, 1);
+    for (double& v : a.values())
+        v = u(rng);
+    for (Index r = 0; r < n; ++r)
+        a.block(a.diagonal(r)) = Block3(0.5 * (a.block(a.diagonal(r)) + a.block(a.diagonal(r)).transpose()) +
+                                        Block3::Identity() * 4.0 * n);
+    return a;
+}
+
+// Three bodies: one chunk, several chunks with blocks across them, and a tiny one.
+struct Bodies {
+    BsrMatrix a = random_spd_upper(30, 1, {});
+    BsrMatrix b = random_spd_upper(50, 2, {0, 10, 11, 35, 50});
+    BsrMatrix c = random_spd_upper(3, 3, {});
+};
+
+// Symmetric coupling between random rows, with repeated blocks: (r, c) and (c, r) = ᵀ.
+void random_coupling(SceneMatrix& scene, unsigned seed, Index pairs)
+{
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<double> u(-0.5, 0.5);
+    CouplingBlocks& coupling = scene.coupling();
+    coupling.reset(2 * pairs);
+    for (Index p = 0; p < pairs; ++p) {
+        const auto r = static_cast<Index>(rng() % static_cast<unsigned>(scene.num_block_rows()));
+        const auto c = static_cast<Index>(p % 7 == 0 ? r : rng() % static_cast<unsigned>(scene.num_block_rows()));
+        Block3 value;
+        for (int i = 0; i < 9; ++i)
+            value.data()[i] = u(rng);
+        if (r == c)
+            value = 0.5 * (value + value.transpose()).eval();
+        coupling.entry(2 * p) = {r, c, r == c ? Block3(0.5 * value) : value};
+        coupling.entry(2 * p + 1) = {c, r, r == c ? Block3(0.5 * value) : Block3(value.transpose())};
+    }
+    coupling.finish(scene.chunks());
+}
+
+// The whole scene matrix, every block, as an Eigen matrix.
+SparseMat assembled(const SceneMatrix& scene)
+{
+    std::vector<Eigen::Triplet<double, Index>> triplets;
+    for (Index b = 0; b < scene.num_bodies(); ++b) {
+        const SparseMat body = scene.body_matrix(b).to_sparse();
+        for (Index k = 0; k < body.outerSize(); ++k)
+            for (SparseMat::InnerIterator it(body, k); it; ++it)
+                triplets.emplace_back(3 * scene.offset(b) + it.row(), 3 * scene.offset(b) + it.col(), it.value());
+    }
+    const CouplingBlocks& coupling = scene.coupling();
+    for (Index k = 0; k < coupling.size(); ++k)
+        for (int i = 0; i < 3; ++i)
+            for (int j = 0; j < 3; ++j)
+                triplets.emplace_back(3 * coupling.block(k).row + i, 3 * coupling.block(k).column + j,
+                                      coupling.block(k).value(i, j));
+    SparseMat whole(scene.num_dofs(), scene.num_dofs());
+    whole.setFromTriplets(triplets.begin(), triplets.end());
+    return whole;
+}
+} // namespace
+
+TEST(SceneMatrix, RowsAndChunksFollowTheBodies)
+{
+    Bodies bodies;
+    const SceneMatrix scene({&bodies.a, &bodies.b, &bodies.c});
+    EXPECT_EQ(scene.num_block_rows(), 83);
+    EXPECT_EQ(scene.offset(1), 30);
+    EXPECT_EQ(scene.offset(2), 80);
+    // a: one chunk; b: its four; c: one.
+    EXPECT_EQ(scene.chunks().offsets, (std::vector<Index>{0, 30, 40, 41, 65, 80, 83}));
+    EXPECT_EQ(scene.chunk_body(0), 0);
+    EXPECT_EQ(scene.chunk_body(4), 1);
+    EXPECT_EQ(scene.chunk_body(5), 2);
+    BsrMatrix general({0, 1}, {0});
+    EXPECT_THROW(SceneMatrix({&general}), std::invalid_argument);
+}
+
+TEST(SceneMatrix, MultiplyMatchesTheAssembledMatrixWithCoupling)
+{
+    Bodies bodies;
+    SceneMatrix scene({&bodies.a, &bodies.b, &bodies.c});
+    random_coupling(scene, 5, 40);
+    const SparseMat whole = assembled(scene);
+    EXPECT_NEAR(SparseMat(whole - SparseMat(whole.transpose())).norm(), 0.0, 1e-14);
+    const VecX x = VecX::LinSpaced(scene.num_dofs(), -1.0, 1.5);
+    VecX y(scene.num_dofs());
+    std::vector<double> dots(static_cast<std::size_t>(scene.chunks().num_chunks()));
+    scene.multiply(x.data(), y.data(), dots.data());
+    const VecX expected = whole * x;
+    EXPECT_NEAR_REL(y, expected, 1e-12, 1e-12);
+    for (Index c = 0; c < scene.chunks().num_chunks(); ++c) {
+        const Index begin = scene.chunks().offsets[static_cast<std::size_t>(c)];
+        const Index end = scene.chunks().offsets[static_cast<std::size_t>(c) + 1];
+        EXPECT_NEAR(dots[static_cast<std::size_t>(c)],
+                    x.segment(3 * begin, 3 * (end - begin)).dot(expected.segment(3 * begin, 3 * (end - begin))),
+                    1e-10);
+    }
+}
+
+TEST(SceneMatrix, DiagonalBlocksIncludeTheCoupling)
+{
+    Bodies bodies;
+    SceneMatrix scene({&bodies.a, &bodies.b, &bodies.c});
+    random_coupling(scene, 6, 60);
+    const Eigen::MatrixXd whole = Eigen::MatrixXd(assembled(scene));
+    for (Index c = 0; c < scene.chunks().num_chunks(); ++c) {
+        const Index begin = scene.chunks().offsets[static_cast<std::size_t>(c)];
+        const Index end = scene.chunks().offsets[static_cast<std::size_t>(c) + 1];
+        std::vector<Block3> blocks(static_cast<std::size_t>(end - begin));
+        scene.diagonal_blocks(c, blocks.data());
+        for (Index r = begin; r < end; ++r)
+            EXPECT_TRUE(test::is_near(blocks[static_cast<std::size_t>(r - begin)], whole.block<3, 3>(3 * r, 3 * r),
+                                      1e-15, 0.0))
+                << "row " << r;
+    }
+}
+
+TEST(CouplingBlocks, SortsByRowAndColumnAndSumsRepeatsInContributionOrder)
+{
+    Bodies bodies;
+    SceneMatrix scene({&bodies.a, &bodies.b, &bodies.c});
+    CouplingBlocks& coupling = scene.coupling();
+    coupling.reset(5);
+    const Block3 one = Block3::Constant(1.0), tiny = Block3::Constant(1e-17);
+    coupling.entry(0) = {45, 2, one};
+    coupling.entry(1) = {3, 3, one};
+    coupling.entry(2) = {45, 2, tiny};
+    coupling.entry(3) = {45, 1, one};
+    coupling.entry(4) = {45, 2, -one};
+    coupling.finish(scene.chunks());
+    ASSERT_EQ(coupling.size(), 3);
+    EXPECT_EQ(coupling.block(0).row, 3);
+    EXPECT_EQ(coupling.block(1).column, 1);
+    EXPECT_EQ(coupling.block(2).column, 2);
+    // (1 + 1e-17) − 1 in this order is 0; any other order would leave 1e-17.
+    EXPECT_EQ(coupling.block(2).value, Block3(Block3::Zero()));
+    // Row 3 lies in chunk 0, row 45 in chunk 3 (rows 41..64).
+    EXPECT_EQ(coupling.chunk_begin(0), 0);
+    EXPECT_EQ(coupling.chunk_begin(1), 1);
+    EXPECT_EQ(coupling.chunk_begin(3), 1);
+    EXPECT_EQ(coupling.chunk_begin(4), 3);
+    EXPECT_EQ(coupling.chunk_begin(6), 3);
+}
+
+TEST(SceneMatrix, PcgOverTheSceneSolvesTheCoupledSystem)
+{
+    Bodies bodies;
+    SceneMatrix scene({&bodies.a, &bodies.b, &bodies.c});
+    random_coupling(scene, 7, 30);
+    const SparseMat whole = assembled(scene);
+    const VecX rhs = VecX::LinSpaced(scene.num_dofs(), -2.0, 1.0);
+    const VecX direct = Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>>(whole).solve(rhs);
+    for (const PcgPreconditioner kind : {PcgPreconditioner::JACOBI, PcgPreconditioner::BLOCK_JACOBI}) {
+        VecX x = VecX::Zero(scene.num_dofs());
+        PcgSettings settings;
+        settings.tolerance = 1e-12;
+        settings.max_iterations = 500;
+        settings.preconditioner = kind;
+        const PcgResult result = PcgSolver().solve(scene, rhs, x, settings);
+        EXPECT_TRUE(result.converged);
+        EXPECT_NEAR_REL(x, direct, 1e-10 * direct.cwiseAbs().maxCoeff(), 0.0);
+        EXPECT_NEAR((rhs - whole * x).norm() / rhs.norm(), result.residual, 1e-13);
+    }
+}
+
+TEST(SceneMatrix, ProductsAndSolvesAreBitwiseTheSameForAnyThreadCount)
+{
+    Bodies bodies;
+    SceneMatrix scene({&bodies.a, &bodies.b, &bodies.c});
+    random_coupling(scene, 8, 50);
+    const VecX rhs = VecX::LinSpaced(scene.num_dofs(), -1.0, 3.0);
+    std::vector<double> dots_one(static_cast<std::size_t>(scene.chunks().num_chunks())), dots_two = dots_one;
+    VecX y_one(scene.num_dofs()), y_two(scene.num_dofs());
+    VecX x_one = VecX::Zero(scene.num_dofs()), x_two = x_one;
+    PcgSettings settings;
+    settings.tolerance = 1e-14;
+    settings.max_iterations = 25;
+    PcgResult one, two;
+    tbb::task_arena(1).execute([&] {
+        scene.multiply(rhs.data(), y_one.data(), dots_one.data());
+        one = PcgSolver().solve(scene, rhs, x_one, settings);
+    });
+    tbb::task_arena(2).execute([&] {
+        scene.multiply(rhs.data(), y_two.data(), dots_two.data());
+        two = PcgSolver().solve(scene, rhs, x_two, settings);
+    });
+    EXPECT_TRUE(y_one == y_two);
+    EXPECT_EQ(dots_one, dots_two);
+    EXPECT_TRUE(x_one == x_two);
+    EXPECT_EQ(one.residual, two.residual);
+}

@@ -1,0 +1,450 @@
+// bench_precision: what single-precision matrix values would give the solve, measured before
+// BsrMatrix gets them. The SOFA beam's implicit Euler matrix (16×16×76 nodes, 101,250 tets,
+// cases/bench/sofa_beam_16x16x76.toml at its first step) is multiplied and solved by
+//   double  SceneMatrix::multiply with the chunks' pᵀq, and PcgSolver (Jacobi, tolerance 0:
+//           the 10-iteration cap), on the beam as a one-body scene
+//   float   the same upper-storage product with float values (vectors, products and sums in
+//           double; the same chunks, tasks, gathers and chunk-ordered sums), and the same PCG
+//           (three fused passes per iteration) around it
+// in one run. `--accuracy` instead solves with both to 1e-12 and prints the true residual
+// ‖b − A_double x‖/‖b‖ of each: the float values' accuracy floor.
+//
+//   bench_precision [--threads N] [--accuracy] [benchmark options]     (N defaults to 2)
+#include "implicit_euler_system.hpp"
+
+#include <corocontact/core/primitives.hpp>
+#include <corocontact/partition/partition.hpp>
+#include <corocontact/sim/body.hpp>
+#include <corocontact/solver/pcg.hpp>
+#include <corocontact/solver/row_chunks.hpp>
+#include <corocontact/solver/scene_matrix.hpp>
+#include <corocontact/solver/vector_ops.hpp>
+
+#include <benchmark/benchmark.h>
+
+#include <tbb/global_control.h>
+
+#if defined(__AVX2__) && defined(__FMA__)
+#include <immintrin.h>
+#endif
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace {
+
+using namespace coro;
+
+
+/// The beam's system at its first implicit Euler step.
+struct Beam {
+    std::unique_ptr<Body> body;
+    VecX rhs;
+};
+
+const Beam& beam()
+{
+    static const Beam b = [] {
+        BodySpec spec;
+        spec.name = "beam";
+        spec.material.young = 1000.0;
+        spec.material.poisson = 0.3;
+        spec.material.density = 50.0 / 304.0;
+        spec.rayleigh_mass = 0.1;
+        spec.rayleigh_stiffness = 0.1;
+        FixedRegion clamp;
+        clamp.max = Vec3(0.1, 1e9, 1e9);
+        spec.fixed.push_back(clamp);
+        const TetMesh mesh = make_box(Vec3(0.0, 6.0, -2.0), Vec3(19.0, 10.0, 2.0), {75, 15, 15});
+        Beam out;
+        out.body = std::make_unique<Body>(mesh, spec, default_num_parts(mesh.num_tets(), 4));
+        out.rhs = bench::implicit_euler_system(*out.body, 0.04, Vec3(0.0, -9.0, 0.0));
+        return out;
+    }();
+    return b;
+}
+
+/// The upper-storage matrix with float values, multiplied as SceneMatrix::multiply multiplies
+/// a one-body scene: the body's product chunks as tasks, each chunk's rows with the mirrors of
+/// blocks inside it, then the mirrors reaching across chunks gathered per row with the chunk's
+/// partial dot product.
+class FloatUpper {
+public:
+    explicit FloatUpper(const BsrMatrix& a) : m_a(a), m_scene({&a})
+    {
+        m_values.assign(a.values().begin(), a.values().end());
+        // Per row, the blocks (k, source row) of earlier chunks whose column is the row (the
+        // BsrMatrix keeps its own list private).
+        const std::vector<Index>& chunks = a.chunk_offsets();
+        const Index n = a.num_block_rows();
+        std::vector<Index> chunk_end(static_cast<std::size_t>(n));
+        for (std::size_t c = 0; c + 1 < chunks.size(); ++c)
+            for (Index r = chunks[c]; r < chunks[c + 1]; ++r)
+                chunk_end[static_cast<std::size_t>(r)] = chunks[c + 1];
+        m_gather_offsets.assign(static_cast<std::size_t>(n) + 1, 0);
+        for (Index r = 0; r < n; ++r)
+            for (Index k = a.row_offsets()[static_cast<std::size_t>(r)]; k < a.row_offsets()[static_cast<std::size_t>(r) + 1]; ++k)
+                if (a.columns()[static_cast<std::size_t>(k)] >= chunk_end[static_cast<std::size_t>(r)])
+                    ++m_gather_offsets[static_cast<std::size_t>(a.columns()[static_cast<std::size_t>(k)]) + 1];
+        for (std::size_t i = 1; i < m_gather_offsets.size(); ++i)
+            m_gather_offsets[i] += m_gather_offsets[i - 1];
+        m_gather.resize(static_cast<std::size_t>(m_gather_offsets.back()));
+        std::vector<Index> fill(m_gather_offsets.begin(), m_gather_offsets.end() - 1);
+        for (Index r = 0; r < n; ++r)
+            for (Index k = a.row_offsets()[static_cast<std::size_t>(r)]; k < a.row_offsets()[static_cast<std::size_t>(r) + 1]; ++k) {
+                const Index c = a.columns()[static_cast<std::size_t>(k)];
+                if (c >= chunk_end[static_cast<std::size_t>(r)])
+                    m_gather[static_cast<std::size_t>(fill[static_cast<std::size_t>(c)]++)] = {k, r};
+            }
+        m_chunk_dots.resize(static_cast<std::size_t>(m_scene.chunks().num_chunks()));
+    }
+
+    const RowChunks& chunks() const { return m_scene.chunks(); }
+
+    /// y = A x with float values; returns x·y summed per chunk, then in chunk order.
+    double multiply_dot(const double* x, double* y)
+    {
+        for_each_chunk(m_scene.chunks(), [&](Index, Index begin, Index end) {
+            std::fill(y + 3 * static_cast<std::ptrdiff_t>(begin), y + 3 * static_cast<std::ptrdiff_t>(end), 0.0);
+            chunk_rows(x, y, begin, end);
+        });
+        for_each_chunk(m_scene.chunks(), [&](Index c, Index begin, Index end) {
+            for (Index r = begin; r < end; ++r)
+                gather_row(x, y, r);
+            double sum = 0.0;
+            for (std::ptrdiff_t i = 3 * static_cast<std::ptrdiff_t>(begin); i < 3 * static_cast<std::ptrdiff_t>(end); ++i)
+                sum += x[i] * y[i];
+            m_chunk_dots[static_cast<std::size_t>(c)] = sum;
+        });
+        double sum = 0.0;
+        for (const double d : m_chunk_dots)
+            sum += d;
+        return sum;
+    }
+
+private:
+#if defined(__AVX2__) && defined(__FMA__)
+    static __m256d load3(const double* p)
+    {
+        return _mm256_insertf128_pd(_mm256_castpd128_pd256(_mm_loadu_pd(p)), _mm_load_sd(p + 2), 1);
+    }
+    static void store3(double* p, __m256d v)
+    {
+        _mm_storeu_pd(p, _mm256_castpd256_pd128(v));
+        _mm_store_sd(p + 2, _mm256_extractf128_pd(v, 1));
+    }
+    struct Rows {
+        __m256d r0, r1, r2;
+        explicit Rows(const float* a)
+            : r0(_mm256_cvtps_pd(_mm_loadu_ps(a))), r1(_mm256_cvtps_pd(_mm_loadu_ps(a + 3))),
+              r2(_mm256_permute4x64_pd(_mm256_cvtps_pd(_mm_loadu_ps(a + 5)), _MM_SHUFFLE(3, 3, 2, 1)))
+        {
+        }
+    };
+    static double sum3(__m256d v)
+    {
+        alignas(32) double lanes[4];
+        _mm256_store_pd(lanes, v);
+        return (lanes[0] + lanes[1]) + lanes[2];
+    }
+    void chunk_rows(const double* x, double* y, Index begin, Index end) const
+    {
+        const Index* offsets = m_a.row_offsets().data();
+        const Index* columns = m_a.columns().data();
+        for (Index r = begin; r != end; ++r) {
+            const double* xr = x + 3 * static_cast<std::ptrdiff_t>(r);
+            const __m256d xr0 = _mm256_broadcast_sd(xr), xr1 = _mm256_broadcast_sd(xr + 1),
+                          xr2 = _mm256_broadcast_sd(xr + 2);
+            __m256d acc0 = _mm256_setzero_pd(), acc1 = _mm256_setzero_pd(), acc2 = _mm256_setzero_pd();
+            for (Index k = offsets[r]; k < offsets[r + 1]; ++k) {
+                const Rows a(m_values.data() + 9 * static_cast<std::ptrdiff_t>(k));
+                const Index c = columns[k];
+                const __m256d xc = load3(x + 3 * static_cast<std::ptrdiff_t>(c));
+                acc0 = _mm256_fmadd_pd(a.r0, xc, acc0);
+                acc1 = _mm256_fmadd_pd(a.r1, xc, acc1);
+                acc2 = _mm256_fmadd_pd(a.r2, xc, acc2);
+                if (c != r && c < end) {
+                    double* yc = y + 3 * static_cast<std::ptrdiff_t>(c);
+                    store3(yc, _mm256_fmadd_pd(a.r2, xr2, _mm256_fmadd_pd(a.r1, xr1, _mm256_fmadd_pd(a.r0, xr0, load3(yc)))));
+                }
+            }
+            double* yr = y + 3 * static_cast<std::ptrdiff_t>(r);
+            yr[0] += sum3(acc0);
+            yr[1] += sum3(acc1);
+            yr[2] += sum3(acc2);
+        }
+    }
+    void gather_row(const double* x, double* y, Index row) const
+    {
+        const Index first = m_gather_offsets[static_cast<std::size_t>(row)],
+                    last = m_gather_offsets[static_cast<std::size_t>(row) + 1];
+        if (first == last)
+            return;
+        double* yr = y + 3 * static_cast<std::ptrdiff_t>(row);
+        __m256d acc = load3(yr);
+        for (Index e = first; e < last; ++e) {
+            const Rows a(m_values.data() + 9 * static_cast<std::ptrdiff_t>(m_gather[static_cast<std::size_t>(e)][0]));
+            const double* xs = x + 3 * static_cast<std::ptrdiff_t>(m_gather[static_cast<std::size_t>(e)][1]);
+            acc = _mm256_fmadd_pd(a.r2, _mm256_broadcast_sd(xs + 2),
+                                  _mm256_fmadd_pd(a.r1, _mm256_broadcast_sd(xs + 1),
+                                                  _mm256_fmadd_pd(a.r0, _mm256_broadcast_sd(xs), acc)));
+        }
+        store3(yr, acc);
+    }
+#else
+    void chunk_rows(const double* x, double* y, Index begin, Index end) const
+    {
+        const Index* offsets = m_a.row_offsets().data();
+        const Index* columns = m_a.columns().data();
+        for (Index r = begin; r != end; ++r) {
+            const double* xr = x + 3 * static_cast<std::ptrdiff_t>(r);
+            double y0 = 0.0, y1 = 0.0, y2 = 0.0;
+            for (Index k = offsets[r]; k < offsets[r + 1]; ++k) {
+                const float* a = m_values.data() + 9 * static_cast<std::ptrdiff_t>(k);
+                const Index c = columns[k];
+                const double* xc = x + 3 * static_cast<std::ptrdiff_t>(c);
+                y0 += a[0] * xc[0] + a[1] * xc[1] + a[2] * xc[2];
+                y1 += a[3] * xc[0] + a[4] * xc[1] + a[5] * xc[2];
+                y2 += a[6] * xc[0] + a[7] * xc[1] + a[8] * xc[2];
+                if (c != r && c < end) {
+                    double* yc = y + 3 * static_cast<std::ptrdiff_t>(c);
+                    yc[0] += a[0] * xr[0] + a[3] * xr[1] + a[6] * xr[2];
+                    yc[1] += a[1] * xr[0] + a[4] * xr[1] + a[7] * xr[2];
+                    yc[2] += a[2] * xr[0] + a[5] * xr[1] + a[8] * xr[2];
+                }
+            }
+            double* yr = y + 3 * static_cast<std::ptrdiff_t>(r);
+            yr[0] += y0;
+            yr[1] += y1;
+            yr[2] += y2;
+        }
+    }
+    void gather_row(const double* x, double* y, Index row) const
+    {
+        double* yr = y + 3 * static_cast<std::ptrdiff_t>(row);
+        for (Index e = m_gather_offsets[static_cast<std::size_t>(row)];
+             e < m_gather_offsets[static_cast<std::size_t>(row) + 1]; ++e) {
+            const float* a = m_values.data() + 9 * static_cast<std::ptrdiff_t>(m_gather[static_cast<std::size_t>(e)][0]);
+            const double* xs = x + 3 * static_cast<std::ptrdiff_t>(m_gather[static_cast<std::size_t>(e)][1]);
+            yr[0] += a[0] * xs[0] + a[3] * xs[1] + a[6] * xs[2];
+            yr[1] += a[1] * xs[0] + a[4] * xs[1] + a[7] * xs[2];
+            yr[2] += a[2] * xs[0] + a[5] * xs[1] + a[8] * xs[2];
+        }
+    }
+#endif
+
+    const BsrMatrix& m_a;
+    SceneMatrix m_scene; // the chunks and their tasks, as PcgSolver runs a one-body scene
+    std::vector<float> m_values;
+    std::vector<Index> m_gather_offsets;
+    std::vector<std::array<Index, 2>> m_gather;
+    std::vector<double> m_chunk_dots;
+};
+
+/// PcgSolver's iteration (Jacobi) around the float product: q = Ap with the chunks' pᵀq, then
+/// one fused pass x += αp, r −= αq, z = D⁻¹r with the chunks' r·r and r·z, then p = z + βp;
+/// every sum per chunk, then in chunk order.
+struct FloatPcg {
+    struct Sums {
+        double rr = 0.0, rz = 0.0;
+    };
+    VecX r, z, p, q, inverse_diagonal;
+    std::vector<Sums> chunk_sums;
+
+    /// @return the relative residual ‖r‖/‖b‖ of the recurrence after `iterations`
+    double solve(FloatUpper& a, const BsrMatrix& pattern, const VecX& b, VecX& x, Index iterations, double tolerance)
+    {
+        const Index n = pattern.num_dofs();
+        r.resize(n);
+        z.resize(n);
+        p.resize(n);
+        q.resize(n);
+        inverse_diagonal.resize(n);
+        chunk_sums.resize(static_cast<std::size_t>(a.chunks().num_chunks()));
+        for (Index v = 0; v < pattern.num_block_rows(); ++v) // the float values' diagonal
+            for (int i = 0; i < 3; ++i)
+                inverse_diagonal[3 * v + i] =
+                    1.0 / static_cast<double>(static_cast<float>(pattern.block(pattern.diagonal(v))(i, i)));
+        a.multiply_dot(x.data(), r.data());
+        Sums sums = pass(a.chunks(), b.data(), 0.0, x.data());
+        double rz = sums.rz;
+        const double b_norm = b.norm();
+        p = z;
+        Index it = 0;
+        double r_norm = std::sqrt(sums.rr);
+        while (it < iterations && r_norm > tolerance * b_norm) {
+            const double pq = a.multiply_dot(p.data(), q.data());
+            const double alpha = rz / pq;
+            sums = pass(a.chunks(), nullptr, alpha, x.data());
+            ++it;
+            r_norm = std::sqrt(sums.rr);
+            xpby(z, sums.rz / rz, p);
+            rz = sums.rz;
+        }
+        return r_norm / b_norm;
+    }
+
+    Sums pass(const RowChunks& chunks, const double* b, double alpha, double* x)
+    {
+        for_each_chunk(chunks, [&](Index c, Index row_begin, Index row_end) {
+            const std::ptrdiff_t begin = 3 * static_cast<std::ptrdiff_t>(row_begin);
+            const std::ptrdiff_t end = 3 * static_cast<std::ptrdiff_t>(row_end);
+            if (b) {
+                for (std::ptrdiff_t i = begin; i < end; ++i)
+                    r[i] = b[i] - r[i];
+            } else {
+                for (std::ptrdiff_t i = begin; i < end; ++i) {
+                    x[i] += alpha * p[i];
+                    r[i] -= alpha * q[i];
+                }
+            }
+            for (std::ptrdiff_t i = begin; i < end; ++i)
+                z[i] = inverse_diagonal[i] * r[i];
+            Sums sums;
+            for (std::ptrdiff_t i = begin; i < end; ++i) {
+                sums.rr += r[i] * r[i];
+                sums.rz += r[i] * z[i];
+            }
+            chunk_sums[static_cast<std::size_t>(c)] = sums;
+        });
+        Sums total;
+        for (const Sums& sums : chunk_sums) {
+            total.rr += sums.rr;
+            total.rz += sums.rz;
+        }
+        return total;
+    }
+};
+
+void SpmvDouble(benchmark::State& state)
+{
+    const BsrMatrix& a = beam().body->system_matrix();
+    const SceneMatrix scene({&a});
+    const VecX x = beam().rhs;
+    VecX y(x.size());
+    std::vector<double> chunk_dots(static_cast<std::size_t>(scene.chunks().num_chunks()));
+    for (auto _ : state) {
+        scene.multiply(x.data(), y.data(), chunk_dots.data());
+        double sum = 0.0;
+        for (const double d : chunk_dots)
+            sum += d;
+        benchmark::DoNotOptimize(sum);
+    }
+    state.counters["blocks"] = a.num_blocks();
+    state.SetBytesProcessed(static_cast<int64_t>(state.iterations()) * a.num_blocks() * 9 * 8);
+}
+
+void SpmvFloat(benchmark::State& state)
+{
+    const BsrMatrix& a = beam().body->system_matrix();
+    FloatUpper f(a);
+    const VecX x = beam().rhs;
+    VecX y(x.size());
+    for (auto _ : state)
+        benchmark::DoNotOptimize(f.multiply_dot(x.data(), y.data()));
+    state.SetBytesProcessed(static_cast<int64_t>(state.iterations()) * a.num_blocks() * 9 * 4);
+}
+
+void Pcg10Double(benchmark::State& state)
+{
+    const BsrMatrix& a = beam().body->system_matrix();
+    const SceneMatrix scene({&a});
+    PcgSolver pcg;
+    PcgSettings settings;
+    settings.max_iterations = 10;
+    settings.tolerance = 0.0;
+    settings.preconditioner = PcgPreconditioner::JACOBI;
+    VecX x(a.num_dofs());
+    double residual = 0.0;
+    for (auto _ : state) {
+        x.setZero();
+        residual = pcg.solve(scene, beam().rhs, x, settings).residual;
+    }
+    state.counters["residual"] = residual;
+}
+
+void Pcg10Float(benchmark::State& state)
+{
+    const BsrMatrix& a = beam().body->system_matrix();
+    FloatUpper f(a);
+    FloatPcg pcg;
+    VecX x(a.num_dofs());
+    double residual = 0.0;
+    for (auto _ : state) {
+        x.setZero();
+        residual = pcg.solve(f, a, beam().rhs, x, 10, 0.0);
+    }
+    state.counters["residual"] = residual;
+}
+
+BENCHMARK(SpmvDouble)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(SpmvFloat)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(Pcg10Double)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(Pcg10Float)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+void accuracy()
+{
+    const BsrMatrix& a = beam().body->system_matrix();
+    const VecX& b = beam().rhs;
+    FloatUpper f(a);
+    VecX ax(b.size()), af(b.size());
+    a.multiply(b, ax);
+    f.multiply_dot(b.data(), af.data());
+    std::printf("float-valued product against the double one: ‖A_f b − A b‖/‖A b‖ = %.3e\n",
+                (af - ax).norm() / ax.norm());
+    for (const Index iterations : {10, 100, 400, 1000, 3000}) {
+        PcgSolver pcg;
+        PcgSettings settings;
+        settings.max_iterations = iterations;
+        settings.tolerance = 1e-14;
+        settings.preconditioner = PcgPreconditioner::JACOBI;
+        VecX xd = VecX::Zero(b.size()), xf = VecX::Zero(b.size());
+        pcg.solve(a, b, xd, settings);
+        FloatPcg float_pcg;
+        const double recurrence = float_pcg.solve(f, a, b, xf, iterations, 1e-14);
+        a.multiply(xd, ax);
+        const double true_double = (b - ax).norm() / b.norm();
+        a.multiply(xf, ax);
+        const double true_float = (b - ax).norm() / b.norm();
+        std::printf("%5d iterations: true residual ‖b − Ax‖/‖b‖ (A double): double values %.3e, float values %.3e "
+                    "(float recurrence %.3e); ‖x_float − x_double‖/‖x_double‖ %.3e\n",
+                    static_cast<int>(iterations), true_double, true_float, recurrence, (xf - xd).norm() / xd.norm());
+    }
+}
+
+} // namespace
+
+int main(int argc, char** argv)
+{
+    int threads = 2;
+    bool check_accuracy = false;
+    std::vector<char*> rest{argv[0]};
+    for (int i = 1; i < argc; ++i) {
+        if (std::strcmp(argv[i], "--threads") == 0 && i + 1 < argc)
+            threads = std::atoi(argv[++i]);
+        else if (std::strcmp(argv[i], "--accuracy") == 0)
+            check_accuracy = true;
+        else
+            rest.push_back(argv[i]);
+    }
+    tbb::global_control control(tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(threads));
+    std::printf("bench_precision: SOFA beam 16x16x76, %d nodes, %d blocks (upper), %d threads\n",
+                static_cast<int>(beam().body->num_vertices()), static_cast<int>(beam().body->system_matrix().num_blocks()),
+                threads);
+    if (check_accuracy) {
+        accuracy();
+        return 0;
+    }
+    int count = static_cast<int>(rest.size());
+    benchmark::Initialize(&count, rest.data());
+    benchmark::RunSpecifiedBenchmarks();
+    benchmark::Shutdown();
+    return 0;
+}
