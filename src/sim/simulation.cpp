@@ -94,7 +94,7 @@ void Simulation::detect(RunSummary& summary)
         return;
     ScopedTimer timer(summary.phases.contact);
     update_contact_surfaces(m_scene.bodies, m_scene.surfaces);
-    m_scene.contacts = detect_contacts(m_scene.surfaces, detection_settings(m_spec.contact));
+    m_scene.contacts = detect_contacts(m_scene.surfaces, detection_settings(m_spec.contact), m_detection);
     if (!m_scene.planes.empty()) {
         std::vector<ContactPoint> planes = detect_plane_contacts(
             m_scene.surfaces, static_cast<Index>(m_scene.bodies.size()), m_scene.planes);
