@@ -65,9 +65,8 @@ ContactRows contact_rows(const std::vector<ContactSurface>& surfaces, Index num_
     for (Index k = 0; k < num_planes; ++k)
         rows.names.push_back("plane" + std::to_string(k));
     // Planes are numbered after every surface: the CSV's order (sim/scene_contact.cpp).
-    const auto other_index = [&](Index other) {
-        const Index plane = plane_of_other(other);
-        return plane >= 0 ? static_cast<Index>(surfaces.size()) + plane : other;
+    const auto other_index = [&](const ContactTarget& other) {
+        return other.is_surface() ? other.index : static_cast<Index>(surfaces.size()) + other.index;
     };
     std::vector<std::tuple<Index, Index, Index, std::size_t>> order;
     order.reserve(points.size());
