@@ -33,6 +33,7 @@ packages=(
   libopenmpi-dev openmpi-bin   # runs over several processes (CORO_WITH_MPI)
   calculix-ccx python3-matplotlib
   python3-vtk9 python3-numpy xvfb xauth libgl1-mesa-dri
+  pybind11-dev python3-pybind11 python3-dev python3-pytest
 )
 
 missing=()

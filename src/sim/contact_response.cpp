@@ -31,8 +31,8 @@ void evaluate_contacts(const std::vector<ContactSurface>& surfaces, const std::v
         Index count = 0;
         if (nodes.carries_nodes(contact.body))
             count += vertex_shares(surfaces[at(contact.body)]);
-        if (nodes.carries_nodes(contact.other) && contact.face >= 0)
-            count += 3 * vertex_shares(surfaces[at(contact.other)]);
+        if (contact.other.is_surface() && nodes.carries_nodes(contact.other.index) && contact.face >= 0)
+            count += 3 * vertex_shares(surfaces[at(contact.other.index)]);
         records.share_offsets[i + 1] = records.share_offsets[i] + count;
     }
     records.shares.resize(at(records.share_offsets.back()));
@@ -61,10 +61,10 @@ void evaluate_contacts(const std::vector<ContactSurface>& surfaces, const std::v
             };
             if (nodes.carries_nodes(contact.body))
                 add_vertex(contact.body, contact.vertex, -1.0);
-            if (nodes.carries_nodes(contact.other) && contact.face >= 0) {
-                const ContactSurface& other = surfaces[at(contact.other)];
+            if (contact.other.is_surface() && nodes.carries_nodes(contact.other.index) && contact.face >= 0) {
+                const ContactSurface& other = surfaces[at(contact.other.index)];
                 for (int c = 0; c < 3; ++c)
-                    add_vertex(contact.other, other.faces(contact.face, c), contact.barycentric[c]);
+                    add_vertex(contact.other.index, other.faces(contact.face, c), contact.barycentric[c]);
             }
             if (count == 0)
                 continue; // two obstacles

@@ -21,7 +21,7 @@ using detail::ByteWriter;
 
 std::size_t at(Index i) { return static_cast<std::size_t>(i); }
 
-using Key = std::tuple<Index, Index, Index>; // (body, vertex, other), case numbering
+using Key = std::tuple<Index, Index, ContactTarget>; // (body, vertex, other), case numbering
 
 Key key_of(const ContactPoint& point) { return {point.body, point.vertex, point.other}; }
 
@@ -40,7 +40,8 @@ void put_contact(ByteWriter& out, const ContactPoint& p)
 {
     out.put(p.body);
     out.put(p.vertex);
-    out.put(p.other);
+    out.put(p.other.kind);
+    out.put(p.other.index);
     out.put(p.face);
     out.put(p.depth);
     out.put(p.normal.data(), 3);
@@ -52,7 +53,8 @@ ContactPoint get_contact(ByteReader& in)
     ContactPoint p;
     p.body = in.get<Index>();
     p.vertex = in.get<Index>();
-    p.other = in.get<Index>();
+    p.other.kind = in.get<ContactTarget::Kind>();
+    p.other.index = in.get<Index>();
     p.face = in.get<Index>();
     p.depth = in.get<double>();
     in.get(p.normal.data(), 3);
@@ -130,8 +132,10 @@ RankContact::RankContact(Communicator& communicator, const BodyOwnership& owners
         m_first_row[at(b) + 1] = m_first_row[at(b)] + vertices[at(b)];
 
     for (std::size_t l = 0; l < m_ids.size(); ++l) {
-        m_start_vertices.push_back(scene.surfaces[l].vertices);
         m_surface_nodes.push_back(surface_nodes(scene.surfaces[l]));
+        std::vector<Vec3>& start = m_start_positions.emplace_back();
+        for (const Index node : m_surface_nodes.back())
+            start.push_back(scene.bodies[l].positions().segment<3>(3 * node));
         m_topology_sent.emplace_back(at(ownership.num_ranks), 0);
     }
     m_copy_of.assign(at(m_num_bodies), -1);
@@ -183,30 +187,33 @@ void RankContact::exchange_surfaces(const std::vector<std::pair<Index, Index>>& 
             char& sent = m_topology_sent[at(l)][at(r)];
             out.put(m_ids[at(l)]);
             out.put(sent);
-            if (!sent) { // topology, and the start positions its tree is built from
+            if (!sent) { // topology, and the start positions the owner's surface was built from
                 out.put_string(surface.name);
-                out.put(static_cast<Index>(surface.vertices.rows()));
-                out.put(static_cast<Index>(surface.faces.rows()));
-                out.put(surface.faces.data(), at(static_cast<Index>(surface.faces.size())));
+                out.put(body.num_vertices());
                 const char embedded = surface.embed_nodes.empty() ? 0 : 1;
                 out.put(embedded);
+                out.put(static_cast<Index>(surface.faces.rows()));
                 if (embedded) {
+                    out.put(surface.faces.data(), at(static_cast<Index>(surface.faces.size())));
+                    out.put(static_cast<Index>(surface.embed_nodes.size()));
                     out.put(surface.embed_nodes.data(), surface.embed_nodes.size());
                     for (const Eigen::Vector4d& w : surface.embed_weights)
                         out.put(w.data(), 4);
-                } else {
-                    out.put(surface.body_node.data(), surface.body_node.size());
+                } else { // the faces in the body's node numbering, as from_body takes them
+                    for (Index f = 0; f < surface.faces.rows(); ++f)
+                        for (int c = 0; c < 3; ++c)
+                            out.put(surface.body_node[at(surface.faces(f, c))]);
                 }
-                out.put(static_cast<char>(surface.closed ? 1 : 0));
-                const Positions& start = m_start_vertices[at(l)];
-                out.put(start.data(), at(static_cast<Index>(start.size())));
                 out.put(static_cast<Index>(nodes.size()));
                 out.put(nodes.data(), nodes.size());
                 for (const Index node : nodes)
                     out.put(body.fixed()[at(node)]);
+                for (const Vec3& x : m_start_positions[at(l)])
+                    out.put(x.data(), 3);
                 sent = 1;
             }
-            out.put(surface.vertices.data(), at(static_cast<Index>(surface.vertices.size())));
+            for (const Index node : nodes)
+                out.put(body.positions().data() + 3 * node, 3);
             for (const Index node : nodes)
                 out.put(body.velocities().data() + 3 * node, 3);
         }
@@ -224,40 +231,38 @@ void RankContact::exchange_surfaces(const std::vector<std::pair<Index, Index>>& 
                 Copy copy;
                 copy.body = body;
                 copy.surface = static_cast<Index>(scene.surfaces.size());
-                ContactSurface surface;
-                surface.name = in.get_string();
-                const auto n_vertices = in.get<Index>(), n_faces = in.get<Index>();
-                surface.faces.resize(n_faces, 3);
-                in.get(surface.faces.data(), at(3 * n_faces));
-                if (in.get<char>()) {
-                    surface.embed_nodes.resize(at(n_vertices));
-                    in.get(surface.embed_nodes.data(), surface.embed_nodes.size());
-                    surface.embed_weights.resize(at(n_vertices));
-                    for (Eigen::Vector4d& w : surface.embed_weights)
+                const std::string name = in.get_string();
+                copy.positions = Positions::Zero(in.get<Index>(), 3);
+                const char embedded = in.get<char>();
+                Tris faces(in.get<Index>(), 3);
+                in.get(faces.data(), at(static_cast<Index>(faces.size())));
+                std::vector<std::array<Index, 4>> embed_nodes;
+                std::vector<Eigen::Vector4d> embed_weights;
+                if (embedded) {
+                    embed_nodes.resize(at(in.get<Index>()));
+                    in.get(embed_nodes.data(), embed_nodes.size());
+                    embed_weights.resize(embed_nodes.size());
+                    for (Eigen::Vector4d& w : embed_weights)
                         in.get(w.data(), 4);
-                } else {
-                    surface.body_node.resize(at(n_vertices));
-                    in.get(surface.body_node.data(), surface.body_node.size());
                 }
-                surface.source_id.resize(at(n_vertices));
-                std::iota(surface.source_id.begin(), surface.source_id.end(), 0);
-                surface.closed = in.get<char>() != 0;
-                surface.vertices.resize(n_vertices, 3);
-                in.get(surface.vertices.data(), at(3 * n_vertices));
-                surface.tree.build(surface.vertices, surface.faces);
                 copy.nodes.resize(at(in.get<Index>()));
                 in.get(copy.nodes.data(), copy.nodes.size());
                 copy.fixed.resize(copy.nodes.size());
                 in.get(copy.fixed.data(), copy.fixed.size());
+                for (const Index node : copy.nodes)
+                    in.get(copy.positions.row(node).data(), 3);
                 copy.velocities.resize(copy.nodes.size());
+                scene.surfaces.push_back(
+                    embedded ? ContactSurface::from_embedding(name, copy.positions, faces, std::move(embed_nodes),
+                                                              std::move(embed_weights))
+                             : ContactSurface::from_body(name, copy.positions, faces));
                 m_copy_of[at(body)] = static_cast<Index>(m_copies.size());
                 m_copies.push_back(std::move(copy));
-                scene.surfaces.push_back(std::move(surface));
             }
             Copy& copy = m_copies[at(m_copy_of[at(body)])];
-            ContactSurface& surface = scene.surfaces[at(copy.surface)];
-            in.get(surface.vertices.data(), at(static_cast<Index>(surface.vertices.size())));
-            surface.tree.refit(surface.vertices);
+            for (const Index node : copy.nodes)
+                in.get(copy.positions.row(node).data(), 3);
+            scene.surfaces[at(copy.surface)].update(copy.positions);
             for (Vec3& v : copy.velocities)
                 in.get(v.data(), 3);
         }
@@ -310,13 +315,15 @@ RankContact::Counts RankContact::detect(Scene& scene, const ContactSettings& set
             own_pairs.emplace_back(std::min(x, y), std::max(x, y));
         }
     std::sort(own_pairs.begin(), own_pairs.end());
-    std::vector<ContactPoint> found = detect_contacts(scene.surfaces, own_pairs, detection_settings(settings));
+    std::vector<ContactPoint> found =
+        detect_contacts(scene.surfaces, own_pairs, detection_settings(settings), m_detection);
     if (!scene.planes.empty()) {
         const std::vector<ContactPoint> planes = detect_plane_contacts(scene.surfaces, n_local, scene.planes);
         found.insert(found.end(), planes.begin(), planes.end());
     }
     const auto global_key = [&](const ContactPoint& p) {
-        return Key{global_surface(p.body), p.vertex, p.other >= 0 ? global_surface(p.other) : p.other};
+        return Key{global_surface(p.body), p.vertex,
+                   p.other.is_surface() ? ContactTarget::surface(global_surface(p.other.index)) : p.other};
     };
     std::vector<std::size_t> order(found.size());
     std::iota(order.begin(), order.end(), std::size_t{0});

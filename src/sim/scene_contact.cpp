@@ -79,9 +79,9 @@ std::vector<NodeContact> node_contacts(const std::vector<ContactSurface>& surfac
 
 std::string contacts_csv(const std::vector<ContactSurface>& surfaces, const std::vector<ContactPoint>& points)
 {
-    // Plane obstacles (other < 0) sort after every surface and are named plane<k>.
-    const auto other_key = [&](Index other) {
-        return other >= 0 ? other : static_cast<Index>(surfaces.size()) + (-1 - other);
+    // Plane obstacles sort after every surface and are named plane<k>.
+    const auto other_key = [&](const ContactTarget& other) {
+        return other.is_surface() ? other.index : static_cast<Index>(surfaces.size()) + other.index;
     };
     const auto other_name = [&](Index key) {
         return key < static_cast<Index>(surfaces.size()) ? surfaces[static_cast<std::size_t>(key)].name

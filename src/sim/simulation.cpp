@@ -146,7 +146,7 @@ void Simulation::detect(RunSummary& summary)
         return;
     }
     update_contact_surfaces(m_scene.bodies, m_scene.surfaces);
-    m_scene.contacts = detect_contacts(m_scene.surfaces, detection_settings(m_spec.contact));
+    m_scene.contacts = detect_contacts(m_scene.surfaces, detection_settings(m_spec.contact), m_detection);
     if (!m_scene.planes.empty()) {
         std::vector<ContactPoint> planes = detect_plane_contacts(
             m_scene.surfaces, static_cast<Index>(m_scene.bodies.size()), m_scene.planes);
@@ -173,6 +173,15 @@ void Simulation::detect(RunSummary& summary)
         summary.embree_disagreements += static_cast<Index>(cross_check(m_scene.contacts, embree).size());
     }
 #endif
+}
+
+void Simulation::update_contact_response()
+{
+    if (!contact_applies(m_spec))
+        return;
+    m_response.compute(m_scene.bodies, m_scene.surfaces, m_scene.contacts, m_spec.contact, m_spec.simulation.dt,
+                       m_system.matrix());
+    m_scene.contact_forces = m_response.forces();
 }
 
 void Simulation::dynamic_step()

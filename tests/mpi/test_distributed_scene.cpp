@@ -320,7 +320,8 @@ density = 500.0
     Index touched_from = 0, touched_to_only = 0;
     const auto touches = [](const Scene& scene, Index a, Index b) {
         for (const ContactPoint& point : scene.contacts)
-            if ((point.body == a && point.other == b) || (point.body == b && point.other == a))
+            if ((point.body == a && point.other == ContactTarget::surface(b)) ||
+                (point.body == b && point.other == ContactTarget::surface(a)))
                 return true;
         return false;
     };

@@ -65,8 +65,8 @@ struct ContactRecords {
 class ContactNodes {
 public:
     virtual ~ContactNodes() = default;
-    /// Whether surface index `surface` (a plane's negative index included) is a body's, whose
-    /// vertices move with nodes; obstacles carry none.
+    /// Whether surface `surface` is a body's, whose vertices move with nodes; obstacles carry
+    /// none.
     virtual bool carries_nodes(Index surface) const = 0;
     /// Velocity of node `node` of that body [m/s].
     virtual Vec3 velocity(Index surface, Index node) const = 0;
@@ -97,7 +97,7 @@ private:
 /// The terms and shares of every contact, in parallel over the contacts (each writes its own
 /// slots, so the result does not depend on the thread count).
 /// @param[in] surfaces  the surfaces the contacts index (bodies' and obstacles')
-/// @param[in] contacts  detection output; other < 0 marks a plane obstacle (see plane_obstacle.hpp)
+/// @param[in] contacts  detection output (surfaces and plane obstacles, see ContactTarget)
 /// @param[in] nodes     velocities and fixed flags of the bodies' nodes
 /// @param[in] dt        the step h [s]
 /// @param[out] records  one entry per contact, in the contacts' order (capacity is kept)
@@ -115,7 +115,7 @@ public:
     /// have held a step's contacts).
     /// @param[in] bodies    the scene's bodies (velocities and fixed nodes are read)
     /// @param[in] surfaces  surfaces of the bodies (same order), then of static obstacles
-    /// @param[in] contacts  detection output; other < 0 marks a plane obstacle (see plane_obstacle.hpp)
+    /// @param[in] contacts  detection output (surfaces and plane obstacles, see ContactTarget)
     /// @param[in] dt        the step h [s]
     /// @param[in,out] matrix  the scene matrix whose coupling() is refilled and finished;
     ///                        blocks in rows or columns of fixed nodes are left out

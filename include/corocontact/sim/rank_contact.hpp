@@ -5,9 +5,11 @@
 ///
 /// Each detection, on every process: the boxes of all bodies are gathered and the same
 /// sort-and-sweep finds the same pairs everywhere. A pair belongs to the owner of its lower
-/// body (obstacle pairs to rank 0), which receives the other body's surface — its topology the
-/// first time, its vertex positions and node velocities every time — and detects both
-/// directions. The terms of every contact go, with the contact, to the owners of the nodes it
+/// body (obstacle pairs to rank 0), which receives the other body's surface — its topology and
+/// the start positions of its nodes the first time, its nodes' positions and velocities every
+/// time — and detects both directions. The copy is built and moved by the code that builds and
+/// moves the owner's surface (ContactSurface::from_body or from_embedding, then update), so it
+/// answers bit for bit as the owner's would. The terms of every contact go, with the contact, to the owners of the nodes it
 /// touches, and each process adds those of its rows in the order of the contacts' keys (body,
 /// vertex, other) in the case's numbering: the order in which one process holding every body
 /// adds them. Forces, coupling blocks and the halo of the PCG are therefore those of one
@@ -65,11 +67,12 @@ public:
 private:
     /// A remote body's surface held here, and the nodes under it.
     struct Copy {
-        Index body = -1;            // case index
-        Index surface = -1;         // index in the scene's surfaces
-        std::vector<Index> nodes;   // ascending: the body nodes the surface moves with
+        Index body = -1;              // case index
+        Index surface = -1;           // index in the scene's surfaces
+        std::vector<Index> nodes;     // ascending: the body nodes the surface moves with
+        Positions positions;          // #V×3: the body's node positions, rows of `nodes` known [m]
         std::vector<Vec3> velocities; // of `nodes` [m/s]
-        std::vector<char> fixed;    // of `nodes`
+        std::vector<char> fixed;      // of `nodes`
         std::size_t slot(Index node) const;
     };
     class Nodes;
@@ -92,10 +95,10 @@ private:
     Index m_num_obstacles = 0;         // obstacle meshes
     std::vector<std::vector<Index>> m_rank_bodies; // per rank, its case bodies ascending
     std::vector<Index> m_first_row;    // #N+1: first row of every case body in one process's numbering
-    // Owner side, per scene body: start positions of its surface (for a copy's tree), the nodes
-    // the surface moves with, and whether each rank has its topology.
-    std::vector<Positions> m_start_vertices;
+    // Owner side, per scene body: the nodes its surface moves with, their start positions (the
+    // surface and its tree were built from them), and whether each rank has its topology.
     std::vector<std::vector<Index>> m_surface_nodes;
+    std::vector<std::vector<Vec3>> m_start_positions;
     std::vector<std::vector<char>> m_topology_sent;
     // Receiver side.
     std::vector<Copy> m_copies;
@@ -103,6 +106,7 @@ private:
     // Buffers kept between detections.
     std::vector<std::vector<char>> m_send, m_receive;
     ContactRecords m_records;
+    DetectionScratch m_detection;
 };
 
 } // namespace coro

@@ -1,7 +1,7 @@
 #pragma once
 /// @file orientation.hpp
 /// @brief Rounding bounds of orientation signs and a face normal with the permanent that bounds
-/// its rounding: what the exact narrow-phase tests (axis_ray.cpp, segment_clear.cpp) share.
+/// its rounding: what the exact narrow-phase tests (axis_ray.cpp, segment_triangle.hpp) share.
 
 #include <cmath>
 #include <limits>

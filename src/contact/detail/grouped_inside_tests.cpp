@@ -1,5 +1,8 @@
 #include "grouped_inside_tests.hpp"
 
+#include "inside_tests.hpp"
+#include "tree_access.hpp"
+
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
@@ -27,7 +30,7 @@ std::vector<SlotPairs> overlapping_slot_pairs(const std::vector<ContactSurface>&
             const ContactSurface& a = surfaces[static_cast<std::size_t>(pairs[j].first)];
             const ContactSurface& b = surfaces[static_cast<std::size_t>(pairs[j].second)];
             if (a.closed || b.closed)
-                a.tree.overlapping_slots(b.tree, a.tree.bounds().intersection(b.tree.bounds()), slot_pairs[j]);
+                overlapping_slots(a.tree, b.tree, a.tree.bounds().intersection(b.tree.bounds()), slot_pairs[j]);
         }
     });
     return slot_pairs;
@@ -35,7 +38,7 @@ std::vector<SlotPairs> overlapping_slot_pairs(const std::vector<ContactSurface>&
 
 void grouped_inside_tests(const std::vector<ContactSurface>& surfaces, const std::vector<PairCandidates>& candidates,
                           const std::vector<SlotPairs>& slot_pairs, const AxisRayTolerances& tolerances,
-                          bool distance_bounds,
+                          bool distance_bounds, tbb::enumerable_thread_specific<GroupScratch>& scratch,
                           const std::function<void(std::size_t pair, const GroupedAnswers& answers)>& use)
 {
     const std::size_t pairs = candidates.size();
@@ -72,9 +75,9 @@ void grouped_inside_tests(const std::vector<ContactSurface>& surfaces, const std
             const ContactSurface& other = surfaces[static_cast<std::size_t>(pair.other)];
             const std::size_t n = pair.vertices.size();
             if (other.closed) {
-                body.tree.clear_edge_groups(body.vertices, other.tree, other.vertices, slot_pairs[pair_of[k]],
-                                            pair.body < pair.other ? 0 : 1, pair.vertices, group, tested,
-                                            distance_bounds ? &answers.path : nullptr);
+                clear_edge_groups(body, other, slot_pairs[pair_of[k]],
+                                  pair.body < pair.other ? PairColumn::FIRST : PairColumn::SECOND, pair.vertices,
+                                  scratch.local(), group, tested, distance_bounds ? &answers.path : nullptr);
             } else {
                 group.resize(n);
                 for (std::size_t i = 0; i < n; ++i)

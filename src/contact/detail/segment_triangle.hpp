@@ -1,14 +1,10 @@
 #pragma once
 /// @file segment_triangle.hpp
 /// @brief Whether a segment misses a triangle (one, or four at once in AVX2 lanes), shown by
-/// orientation signs beyond their rounding
-/// (internal: AabbTree::segment_clear and AabbTree::clear_edge_groups share it).
+/// orientation signs beyond their rounding: the edge test of clear_edge_groups().
 
 #include "orientation.hpp"
-
-#if defined(__AVX2__)
-#include <immintrin.h>
-#endif
+#include "simd.hpp"
 
 #include <cmath>
 
@@ -71,7 +67,7 @@ inline bool segment_misses_triangle(const double* p, const double* q, const doub
 /// Triangles per call of segment_misses_triangles().
 constexpr int TRIANGLE_LANES = 4;
 
-#if defined(__AVX2__)
+#if CORO_CONTACT_AVX2
 namespace lanes {
 
 /// Four vertices' (x, y, z) as one register per coordinate, lane k from vertex k.
@@ -126,7 +122,7 @@ inline Signs volume(const __m256d* r, const __m256d* x, const __m256d* y)
 inline int segment_misses_triangles(const double* p, const double* q, const double** a, const double** b,
                                     const double** c, int count)
 {
-#if defined(__AVX2__)
+#if CORO_CONTACT_AVX2
     for (int k = count; k < TRIANGLE_LANES; ++k) {
         a[k] = a[0];
         b[k] = b[0];
