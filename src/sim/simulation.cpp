@@ -99,10 +99,10 @@ void Simulation::detect(RunSummary& summary)
         std::vector<ContactPoint> planes = detect_plane_contacts(
             m_scene.surfaces, static_cast<Index>(m_scene.bodies.size()), m_scene.planes);
         m_scene.contacts.insert(m_scene.contacts.end(), planes.begin(), planes.end());
-        std::sort(m_scene.contacts.begin(), m_scene.contacts.end(), [](const ContactPoint& a, const ContactPoint& b) {
-            return std::tie(a.body, a.vertex, a.other) < std::tie(b.body, b.vertex, b.other);
-        });
+        std::sort(m_scene.contacts.begin(), m_scene.contacts.end(), contact_order);
     }
+    contact_components(m_scene.surfaces, static_cast<Index>(m_scene.bodies.size()), m_components);
+    m_system.matrix().set_components(m_components);
     m_response.compute(m_scene.bodies, m_scene.surfaces, m_scene.contacts, m_spec.contact, m_spec.simulation.dt,
                        m_system.matrix());
     m_scene.contact_forces = m_response.forces();
