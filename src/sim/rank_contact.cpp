@@ -305,6 +305,14 @@ RankContact::Counts RankContact::detect(Scene& scene, const ContactSettings& set
         boxes[at(m_num_bodies + k)] = scene.surfaces[at(n_local + k)].tree.bounds();
     const std::vector<std::pair<Index, Index>> pairs = overlapping_pairs(boxes);
 
+    // The components of the whole scene, from the same boxes on every process.
+    contact_components(std::vector<Aabb>(boxes.begin(), boxes.begin() + m_num_bodies), m_components);
+    m_local_components.resize(m_ids.size());
+    for (std::size_t l = 0; l < m_ids.size(); ++l)
+        m_local_components[l] = m_components[at(m_ids[l])];
+    exchange.set_components(m_components);
+    matrix.set_components(m_local_components, exchange.num_components());
+
     exchange_surfaces(pairs, scene);
 
     // This process's pairs, in its surface numbering, and their contacts in the case's order.

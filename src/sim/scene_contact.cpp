@@ -1,5 +1,6 @@
 #include <corocontact/sim/scene_contact.hpp>
 
+#include <corocontact/contact/broad_phase.hpp>
 #include <corocontact/core/surface_mesh.hpp>
 #include <corocontact/sim/body.hpp>
 #include <corocontact/sim/simulation.hpp>
@@ -49,6 +50,44 @@ void update_contact_surfaces(const std::vector<Body>& bodies, std::vector<Contac
     for (const Body& body : bodies)
         positions.push_back(as_positions(body.positions()));
     update_surfaces(surfaces, positions);
+}
+
+void contact_components(const std::vector<ContactSurface>& surfaces, Index num_bodies,
+                        std::vector<Index>& component_of_body)
+{
+    std::vector<Aabb> boxes;
+    boxes.reserve(static_cast<std::size_t>(num_bodies));
+    for (Index b = 0; b < num_bodies; ++b)
+        boxes.push_back(surfaces[static_cast<std::size_t>(b)].tree.bounds());
+    contact_components(boxes, component_of_body);
+}
+
+void contact_components(const std::vector<Aabb>& body_boxes, std::vector<Index>& component_of_body)
+{
+    const auto num_bodies = static_cast<Index>(body_boxes.size());
+    // Union-find with the lower body as root, so a component's root is its first body.
+    std::vector<Index>& root = component_of_body;
+    root.resize(static_cast<std::size_t>(num_bodies));
+    for (Index b = 0; b < num_bodies; ++b)
+        root[static_cast<std::size_t>(b)] = b;
+    const auto find = [&](Index b) {
+        while (root[static_cast<std::size_t>(b)] != b)
+            b = root[static_cast<std::size_t>(b)] = root[static_cast<std::size_t>(root[static_cast<std::size_t>(b)])];
+        return b;
+    };
+    for (const auto& [i, j] : overlapping_pairs(body_boxes)) {
+        const Index a = find(i), c = find(j);
+        root[static_cast<std::size_t>(std::max(a, c))] = std::min(a, c);
+    }
+    for (Index b = 0; b < num_bodies; ++b)
+        root[static_cast<std::size_t>(b)] = find(b);
+    // A root is its component's first body, so in body order it gets its number before the
+    // rest of its component asks for it.
+    Index count = 0;
+    for (Index b = 0; b < num_bodies; ++b) {
+        const Index first = root[static_cast<std::size_t>(b)];
+        root[static_cast<std::size_t>(b)] = first == b ? count++ : root[static_cast<std::size_t>(first)];
+    }
 }
 
 DetectionSettings detection_settings(const ContactSettings& contact)

@@ -68,11 +68,13 @@ struct Simulation::Ranks {
     Index steps = 0;              // steps of this run
     Index cross_rank = 0;         // contacts detected here that touch another process, summed
 
-    Ranks(const SceneDistribution& distribution, const Scene& scene, const SceneMatrix& matrix, bool with_contact)
+    Ranks(const SceneDistribution& distribution, const Scene& scene, SceneMatrix& matrix, bool with_contact)
         : communicator(*distribution.communicator),
           exchange(communicator, chunk_bodies(distribution, matrix), matrix.num_block_rows()),
           case_bodies(distribution.ownership.owner.size())
     {
+        // Until a detection joins them, every case body is a component of its own.
+        matrix.set_components(distribution.body_ids, exchange.num_components());
         if (with_contact)
             contact.emplace(communicator, distribution.ownership, distribution.body_ids, scene);
     }
@@ -151,10 +153,10 @@ void Simulation::detect(RunSummary& summary)
         std::vector<ContactPoint> planes = detect_plane_contacts(
             m_scene.surfaces, static_cast<Index>(m_scene.bodies.size()), m_scene.planes);
         m_scene.contacts.insert(m_scene.contacts.end(), planes.begin(), planes.end());
-        std::sort(m_scene.contacts.begin(), m_scene.contacts.end(), [](const ContactPoint& a, const ContactPoint& b) {
-            return std::tie(a.body, a.vertex, a.other) < std::tie(b.body, b.vertex, b.other);
-        });
+        std::sort(m_scene.contacts.begin(), m_scene.contacts.end(), contact_order);
     }
+    contact_components(m_scene.surfaces, static_cast<Index>(m_scene.bodies.size()), m_components);
+    m_system.matrix().set_components(m_components);
     m_response.compute(m_scene.bodies, m_scene.surfaces, m_scene.contacts, m_spec.contact, m_spec.simulation.dt,
                        m_system.matrix());
     m_scene.contact_forces = m_response.forces();

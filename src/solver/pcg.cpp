@@ -1,10 +1,10 @@
 #include <corocontact/solver/pcg.hpp>
 
 #include <corocontact/core/error.hpp>
-#include <corocontact/solver/vector_ops.hpp>
 
 #include <Eigen/LU>
 
+#include <algorithm>
 #include <cmath>
 
 namespace coro {
@@ -32,26 +32,37 @@ void PcgSolver::build_preconditioner(const SceneMatrix& a, PcgPreconditioner kin
     });
 }
 
-double PcgSolver::sum_chunks(const std::vector<double>& chunk_dots) const
+void PcgSolver::sum_by_component(const SceneMatrix& a, const std::vector<double>& partials, int width, bool all)
 {
-    double sum = 0.0;
+    m_totals.assign(m_components.size() * static_cast<std::size_t>(width), 0.0);
     if (m_exchange) {
-        m_exchange->sum_chunks(chunk_dots.data(), 1, &sum);
-        return sum;
+        m_exchange->sum_by_component(partials.data(), width, m_totals.data());
+        return;
     }
-    for (const double d : chunk_dots)
-        sum += d;
-    return sum;
+    for (Index c = 0; c < a.chunks().num_chunks(); ++c) {
+        const auto k = at(a.chunk_component(c));
+        if (!all && !m_components[k].active)
+            continue;
+        for (int j = 0; j < width; ++j)
+            m_totals[k * static_cast<std::size_t>(width) + static_cast<std::size_t>(j)] +=
+                partials[at(c) * static_cast<std::size_t>(width) + static_cast<std::size_t>(j)];
+    }
 }
 
-void PcgSolver::multiply(const SceneMatrix& a, double* x, double* y, double* chunk_dots) const
+void PcgSolver::mark_active_chunks(const SceneMatrix& a)
+{
+    for (Index c = 0; c < a.chunks().num_chunks(); ++c)
+        m_chunk_active[at(c)] = m_components[at(a.chunk_component(c))].active ? 1 : 0;
+}
+
+void PcgSolver::multiply(const SceneMatrix& a, double* x, double* y, double* chunk_dots)
 {
     if (m_exchange)
         m_exchange->update_ghosts(x);
-    a.multiply(x, y, chunk_dots);
+    a.multiply(x, y, chunk_dots, m_chunk_active.data());
 }
 
-PcgSolver::Sums PcgSolver::residual_pass(const RowChunks& chunks, const double* b, double alpha, double* x)
+void PcgSolver::residual_pass(const SceneMatrix& a, const double* b, double* x)
 {
     double* r = m_r.data();
     double* z = m_z.data();
@@ -59,13 +70,16 @@ PcgSolver::Sums PcgSolver::residual_pass(const RowChunks& chunks, const double* 
     const double* q = m_q.data();
     const double* inv_diag = m_inverse_diagonal.data();
     const bool block = m_kind == PcgPreconditioner::BLOCK_JACOBI;
-    for_each_chunk(chunks, [&](Index c, Index row_begin, Index row_end) {
+    for_each_chunk(a.chunks(), [&](Index c, Index row_begin, Index row_end) {
+        if (!m_chunk_active[at(c)])
+            return;
         const std::ptrdiff_t begin = 3 * static_cast<std::ptrdiff_t>(row_begin);
         const std::ptrdiff_t end = 3 * static_cast<std::ptrdiff_t>(row_end);
         if (b) {
             for (std::ptrdiff_t i = begin; i < end; ++i)
                 r[i] = b[i] - r[i];
         } else {
+            const double alpha = m_components[at(a.chunk_component(c))].alpha;
             for (std::ptrdiff_t i = begin; i < end; ++i) {
                 x[i] += alpha * p[i];
                 r[i] -= alpha * q[i];
@@ -73,33 +87,33 @@ PcgSolver::Sums PcgSolver::residual_pass(const RowChunks& chunks, const double* 
         }
         if (block) {
             for (Index v = row_begin; v != row_end; ++v)
-                Eigen::Map<Vec3>(z + 3 * v) =
-                    m_inverse_blocks[at(v)] * Eigen::Map<const Vec3>(r + 3 * v);
+                Eigen::Map<Vec3>(z + 3 * v) = m_inverse_blocks[at(v)] * Eigen::Map<const Vec3>(r + 3 * v);
         } else {
             for (std::ptrdiff_t i = begin; i < end; ++i)
                 z[i] = inv_diag[i] * r[i];
         }
-        Sums sums;
+        double rr = 0.0, rz = 0.0;
         for (std::ptrdiff_t i = begin; i < end; ++i) {
-            sums.rr += r[i] * r[i];
-            sums.rz += r[i] * z[i];
+            rr += r[i] * r[i];
+            rz += r[i] * z[i];
         }
-        m_chunk_sums[2 * at(c)] = sums.rr;
-        m_chunk_sums[2 * at(c) + 1] = sums.rz;
+        m_partials[2 * at(c)] = rr;
+        m_partials[2 * at(c) + 1] = rz;
     });
-    Sums total;
-    if (m_exchange) {
-        double totals[2] = {0.0, 0.0};
-        m_exchange->sum_chunks(m_chunk_sums.data(), 2, totals);
-        total.rr = totals[0];
-        total.rz = totals[1];
-        return total;
-    }
-    for (std::size_t c = 0; c < m_chunk_sums.size(); c += 2) {
-        total.rr += m_chunk_sums[c];
-        total.rz += m_chunk_sums[c + 1];
-    }
-    return total;
+}
+
+void PcgSolver::direction_pass(const SceneMatrix& a)
+{
+    double* p = m_p.data();
+    const double* z = m_z.data();
+    for_each_chunk(a.chunks(), [&](Index c, Index row_begin, Index row_end) {
+        if (!m_chunk_active[at(c)])
+            return;
+        const double beta = m_components[at(a.chunk_component(c))].beta;
+        for (std::ptrdiff_t i = 3 * static_cast<std::ptrdiff_t>(row_begin); i < 3 * static_cast<std::ptrdiff_t>(row_end);
+             ++i)
+            p[i] = z[i] + beta * p[i];
+    });
 }
 
 PcgResult PcgSolver::solve(const BsrMatrix& a, CRef<VecX> b, Eigen::Ref<VecX> x, const PcgSettings& settings)
@@ -113,62 +127,104 @@ PcgResult PcgSolver::solve(const SceneMatrix& a, CRef<VecX> b, Eigen::Ref<VecX> 
     const Index n = a.num_dofs();
     CORO_ASSERT(b.size() == n && x.size() == n);
     const RowChunks& chunks = a.chunks();
-    m_exchange = exchange;
     m_r.resize(n);
     m_z.resize(n);
+    m_exchange = exchange;
     m_p.resize(n + (exchange ? 3 * exchange->num_ghost_rows() : 0));
     m_q.resize(n);
-    m_chunk_dots.resize(at(chunks.num_chunks()));
-    m_chunk_sums.resize(2 * at(chunks.num_chunks()));
+    m_partials.resize(2 * at(chunks.num_chunks()));
+    m_chunk_active.assign(at(chunks.num_chunks()), 1);
+    m_components.assign(at(a.num_components()), Component{});
 
-    PcgResult result;
+    // ‖b_k‖ per component; a component with b_k = 0 has the solution 0 and takes no iteration.
     for_each_chunk(chunks, [&](Index c, Index begin, Index end) {
-        m_chunk_dots[at(c)] = b.segment(3 * begin, 3 * (end - begin)).squaredNorm();
+        m_partials[at(c)] = b.segment(3 * begin, 3 * (end - begin)).squaredNorm();
     });
-    const double b_norm = std::sqrt(sum_chunks(m_chunk_dots));
-    CORO_CHECK(std::isfinite(b_norm), NumericalError, "PCG: the right-hand side is not finite (‖b‖ = " << b_norm << ")");
-    if (b_norm == 0.0) {
-        x.setZero();
-        result.converged = true;
-        return result;
+    sum_by_component(a, m_partials, 1, true);
+    bool any_zero = false;
+    for (std::size_t k = 0; k < m_components.size(); ++k) {
+        Component& component = m_components[k];
+        component.b_norm = std::sqrt(m_totals[k]);
+        CORO_CHECK(std::isfinite(component.b_norm), NumericalError,
+                   "PCG: the right-hand side is not finite (‖b‖ = " << component.b_norm << ")");
+        component.active = component.b_norm > 0.0;
+        any_zero = any_zero || !component.active;
+    }
+    if (any_zero) {
+        mark_active_chunks(a);
+        for_each_chunk(chunks, [&](Index c, Index begin, Index end) {
+            if (!m_chunk_active[at(c)])
+                x.segment(3 * begin, 3 * (end - begin)).setZero();
+        });
     }
     build_preconditioner(a, settings.preconditioner);
 
-    if (exchange) { // x has no ghost rows: multiply a copy that has
-        m_p.head(n) = x;
-        multiply(a, m_p.data(), m_r.data(), nullptr);
-    } else {
-        a.multiply(x.data(), m_r.data(), nullptr);
+    // r = b − A x, z = M⁻¹ r, p = z.
+    mark_active_chunks(a);
+    m_p.head(n) = x; // x has no ghost rows: multiply a copy that has
+    multiply(a, m_p.data(), m_r.data(), nullptr);
+    residual_pass(a, b.data(), x.data());
+    sum_by_component(a, m_partials, 2, false);
+    for (std::size_t k = 0; k < m_components.size(); ++k) {
+        Component& component = m_components[k];
+        if (!component.active)
+            continue;
+        const double rr = m_totals[2 * k], rz = m_totals[2 * k + 1];
+        CORO_CHECK(std::isfinite(rr) && std::isfinite(rz), NumericalError,
+                   "PCG: the initial residual is not finite (rᵀr = " << rr << ", rᵀz = " << rz << ")");
+        component.r_norm = std::sqrt(rr);
+        component.rz = rz;
+        component.active = component.r_norm > settings.tolerance * component.b_norm && settings.max_iterations > 0;
     }
-    Sums sums = residual_pass(chunks, b.data(), 0.0, x.data()); // r = b − A x, z = M⁻¹ r
-    CORO_CHECK(std::isfinite(sums.rr) && std::isfinite(sums.rz), NumericalError,
-               "PCG: the initial residual is not finite (rᵀr = " << sums.rr << ", rᵀz = " << sums.rz << ")");
-    double r_norm = std::sqrt(sums.rr);
-    double rz = sums.rz;
     m_p.head(n) = m_z;
 
-    const double target = settings.tolerance * b_norm;
-    Index iteration = 0;
-    while (r_norm > target && iteration < settings.max_iterations) {
-        multiply(a, m_p.data(), m_q.data(), m_chunk_dots.data());
-        const double pq = sum_chunks(m_chunk_dots);
-        CORO_CHECK(pq > 0.0, NumericalError,
-                   "PCG: pᵀAp = " << pq << " at iteration " << iteration
-                                  << " (the system matrix is not positive definite)");
-        const double alpha = rz / pq;
-        sums = residual_pass(chunks, nullptr, alpha, x.data()); // x += αp, r −= αq, z = M⁻¹ r
-        CORO_CHECK(std::isfinite(sums.rr) && std::isfinite(sums.rz), NumericalError,
-                   "PCG: the residual is not finite at iteration " << iteration);
-        ++iteration;
-        r_norm = std::sqrt(sums.rr);
-        if (r_norm <= target)
+    for (;;) {
+        mark_active_chunks(a);
+        if (std::none_of(m_components.begin(), m_components.end(), [](const Component& c) { return c.active; }))
             break;
-        xpby(m_z, sums.rz / rz, m_p.head(n));
-        rz = sums.rz;
+        multiply(a, m_p.data(), m_q.data(), m_partials.data());
+        sum_by_component(a, m_partials, 1, false);
+        for (std::size_t k = 0; k < m_components.size(); ++k) {
+            Component& component = m_components[k];
+            if (!component.active)
+                continue;
+            const double pq = m_totals[k];
+            CORO_CHECK(pq > 0.0, NumericalError,
+                       "PCG: pᵀAp = " << pq << " at iteration " << component.iterations
+                                      << " (the system matrix is not positive definite)");
+            component.alpha = component.rz / pq;
+        }
+        residual_pass(a, nullptr, x.data()); // x += αp, r −= αq, z = M⁻¹ r
+        sum_by_component(a, m_partials, 2, false);
+        for (std::size_t k = 0; k < m_components.size(); ++k) {
+            Component& component = m_components[k];
+            if (!component.active)
+                continue;
+            const double rr = m_totals[2 * k], rz = m_totals[2 * k + 1];
+            CORO_CHECK(std::isfinite(rr) && std::isfinite(rz), NumericalError,
+                       "PCG: the residual is not finite at iteration " << component.iterations);
+            ++component.iterations;
+            component.r_norm = std::sqrt(rr);
+            if (component.r_norm <= settings.tolerance * component.b_norm ||
+                component.iterations >= settings.max_iterations) {
+                component.active = false;
+                continue;
+            }
+            component.beta = rz / component.rz;
+            component.rz = rz;
+        }
+        mark_active_chunks(a);
+        direction_pass(a);
     }
-    result.iterations = iteration;
-    result.residual = r_norm / b_norm;
-    result.converged = r_norm <= target;
+
+    PcgResult result;
+    result.converged = true;
+    for (const Component& component : m_components) {
+        const double residual = component.b_norm > 0.0 ? component.r_norm / component.b_norm : 0.0;
+        result.iterations = std::max(result.iterations, component.iterations);
+        result.residual = std::max(result.residual, residual);
+        result.converged = result.converged && residual <= settings.tolerance;
+    }
     return result;
 }
 

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cstring>
+#include <numeric>
 #include <tuple>
 
 namespace coro {
@@ -39,10 +40,25 @@ RankExchange::RankExchange(Communicator& communicator, const std::vector<Index>&
     }
     std::sort(chunks.begin(), chunks.end());
     m_order.reserve(chunks.size());
-    for (const auto& chunk : chunks)
+    for (const auto& chunk : chunks) {
         m_order.push_back(std::get<2>(chunk));
+        m_order_body.push_back(std::get<0>(chunk));
+    }
+    const Index num_bodies = m_order_body.empty() ? 0 : m_order_body.back() + 1;
+    m_component_of_body.resize(at(num_bodies));
+    std::iota(m_component_of_body.begin(), m_component_of_body.end(), Index{0});
+    m_num_components = num_bodies;
     m_counts.resize(all.size());
     m_displacements.resize(all.size());
+}
+
+void RankExchange::set_components(std::vector<Index> component_of_body)
+{
+    CORO_ASSERT(component_of_body.size() == m_component_of_body.size());
+    m_component_of_body = std::move(component_of_body);
+    m_num_components = 0;
+    for (const Index k : m_component_of_body)
+        m_num_components = std::max(m_num_components, k + 1);
 }
 
 void RankExchange::set_halo(Halo halo)
@@ -75,7 +91,7 @@ void RankExchange::update_ghosts(double* x)
     }
 }
 
-void RankExchange::sum_chunks(const double* partials, int width, double* totals)
+void RankExchange::sum_by_component(const double* partials, int width, double* totals)
 {
     const std::size_t ranks = m_chunk_counts.size();
     for (std::size_t r = 0; r < ranks; ++r) {
@@ -85,11 +101,14 @@ void RankExchange::sum_chunks(const double* partials, int width, double* totals)
     m_gathered.resize(m_order.size() * static_cast<std::size_t>(width));
     const int mine = m_counts[static_cast<std::size_t>(m_communicator.rank())];
     m_communicator.all_gather(partials, mine, m_gathered.data(), m_counts.data(), m_displacements.data());
-    for (int k = 0; k < width; ++k)
-        totals[k] = 0.0;
-    for (const Index position : m_order)
-        for (int k = 0; k < width; ++k)
-            totals[k] += m_gathered[at(position) * static_cast<std::size_t>(width) + static_cast<std::size_t>(k)];
+    const auto w = static_cast<std::size_t>(width);
+    std::fill(totals, totals + at(m_num_components) * w, 0.0);
+    for (std::size_t i = 0; i < m_order.size(); ++i) {
+        double* total = totals + at(m_component_of_body[at(m_order_body[i])]) * w;
+        const double* partial = m_gathered.data() + at(m_order[i]) * w;
+        for (std::size_t j = 0; j < w; ++j)
+            total[j] += partial[j];
+    }
 }
 
 } // namespace coro

@@ -197,29 +197,35 @@ normal = [0.0, 1.0, 0.0]
 
 } // namespace
 
-TEST(RankExchange, SumsChunksInTheGlobalOrder)
+TEST(RankExchange, SumsChunksPerComponentInTheGlobalOrder)
 {
-    // Chunks of bodies dealt to the ranks round robin: the global order interleaves the ranks.
+    // Chunks of bodies dealt to the ranks round robin: the global order interleaves the ranks,
+    // and the components interleave the bodies.
     const int ranks = world().size(), me = world().rank();
-    const Index bodies = 7;
+    const std::vector<Index> component_of_body = {0, 0, 1, 0, 2, 1, 2};
+    const auto bodies = static_cast<Index>(component_of_body.size());
     std::vector<Index> mine;
-    std::vector<double> partials, all;
+    std::vector<double> partials;
+    std::vector<double> expected(2 * 3, 0.0); // one process: chunk order, two values per chunk
     for (Index b = 0; b < bodies; ++b)
         for (Index c = 0; c <= b % 3; ++c) {
             const double value = 1.0 / (3.0 + b) + 1e-17 * c - 0.1 * (b % 2); // sums depend on the order
-            all.push_back(value);
+            const std::size_t k = at(component_of_body[at(b)]);
+            expected[2 * k] += value;
+            expected[2 * k + 1] += -value / 7.0;
             if (b % ranks == me) {
                 mine.push_back(b);
                 partials.push_back(value);
+                partials.push_back(-value / 7.0);
             }
         }
     RankExchange exchange(world(), mine, 0);
-    double sum = 0.0;
-    exchange.sum_chunks(partials.data(), 1, &sum);
-    double expected = 0.0;
-    for (const double value : all)
-        expected += value;
-    EXPECT_EQ(sum, expected);
+    EXPECT_EQ(exchange.num_components(), bodies) << "every body its own component until set";
+    exchange.set_components(component_of_body);
+    ASSERT_EQ(exchange.num_components(), 3);
+    std::vector<double> totals(expected.size(), -1.0);
+    exchange.sum_by_component(partials.data(), 2, totals.data());
+    EXPECT_EQ(totals, expected);
 }
 
 TEST(RankExchange, FillsGhostRowsWithTheOwnersValues)

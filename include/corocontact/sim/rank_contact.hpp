@@ -59,8 +59,9 @@ public:
     ///                       `other` in the case's numbering: bodies, then obstacle meshes, or
     ///                       a plane); contact_forces := the forces on its nodes
     /// @param[in,out] response  applied to this process's rows
-    /// @param[in,out] matrix    the scene matrix: its coupling blocks refilled
-    /// @param[in,out] exchange  its halo set to the coupling's ghost rows
+    /// @param[in,out] matrix    the scene matrix: its coupling blocks refilled, its components
+    ///                          those of the whole scene (contact_components of every box)
+    /// @param[in,out] exchange  its halo set to the coupling's ghost rows, its components set
     Counts detect(Scene& scene, const ContactSettings& settings, double dt, ContactResponse& response,
                   SceneMatrix& matrix, RankExchange& exchange);
 
@@ -94,6 +95,8 @@ private:
     Index m_num_bodies = 0;            // N: bodies of the case
     Index m_num_obstacles = 0;         // obstacle meshes
     std::vector<std::vector<Index>> m_rank_bodies; // per rank, its case bodies ascending
+    std::vector<Index> m_components;       // case body → component of the whole scene
+    std::vector<Index> m_local_components; // scene body → component of the whole scene
     std::vector<Index> m_first_row;    // #N+1: first row of every case body in one process's numbering
     // Owner side, per scene body: the nodes its surface moves with, their start positions (the
     // surface and its tree were built from them), and whether each rank has its topology.

@@ -172,6 +172,7 @@ private:
     std::unique_ptr<Ranks> m_ranks;        // distributed: the exchanges with the other processes
     SceneSystem m_system;                  // the scene-wide implicit Euler step
     ContactResponse m_response;            // of the last detection, used by the next step
+    std::vector<Index> m_components;       // contact_components() of the last detection
     DetectionScratch m_detection;          // detect_contacts' working memory, kept from step to step
     DivergenceCheck m_divergence;          // run after every step
     Index m_step = 0;                      // steps done
