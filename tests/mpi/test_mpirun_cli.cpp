@@ -40,12 +40,15 @@ std::string slurp(const fs::path& path)
 
 // Runs corocontact with `arguments`, alone (ranks = 0) or under mpirun -np ranks. OpenMPI
 // refuses root without the two variables; on 2 shared cores its waits must yield the core.
+// Under ASan, OpenMPI's own leaks at exit are suppressed (lsan.supp), nothing else.
 Outcome corocontact(int ranks, const std::string& arguments, const fs::path& dir)
 {
     const fs::path out = dir / "stdout.txt", err = dir / "stderr.txt";
     std::string command = std::string(CORO_CLI_PATH) + " " + arguments;
     if (ranks > 0)
-        command = "OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_mpi_yield_when_idle=1 " +
+        command = "OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_mpi_yield_when_idle=1 "
+                  "ASAN_OPTIONS=\"${ASAN_OPTIONS}:fast_unwind_on_malloc=0\" "
+                  "LSAN_OPTIONS=\"${LSAN_OPTIONS}:suppressions=" CORO_MPI_LSAN_SUPPRESSIONS "\" " +
                   std::string(CORO_MPIEXEC) + " -np " + std::to_string(ranks) + " --oversubscribe --bind-to none " +
                   command;
     const int status = std::system((command + " > " + out.string() + " 2> " + err.string() + " < /dev/null").c_str());
