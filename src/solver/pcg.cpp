@@ -11,6 +11,11 @@ namespace coro {
 
 namespace {
 std::size_t at(Index i) { return static_cast<std::size_t>(i); }
+
+/// A component stops at ‖r‖ ≤ max(tolerance, RESIDUAL_FLOOR)·‖b‖. Below the floor the recursive
+/// residual is far under what double precision resolves in x, and its squares head for
+/// underflow, where pᵀAp would read 0 and look like a matrix that is not positive definite.
+constexpr double RESIDUAL_FLOOR = 1e-30;
 } // namespace
 
 void PcgSolver::build_preconditioner(const SceneMatrix& a, PcgPreconditioner kind)
@@ -114,6 +119,7 @@ PcgResult PcgSolver::solve(const SceneMatrix& a, CRef<VecX> b, Eigen::Ref<VecX> 
 {
     const Index n = a.num_dofs();
     CORO_ASSERT(b.size() == n && x.size() == n);
+    const double stop = std::max(settings.tolerance, RESIDUAL_FLOOR);
     const RowChunks& chunks = a.chunks();
     m_r.resize(n);
     m_z.resize(n);
@@ -160,7 +166,7 @@ PcgResult PcgSolver::solve(const SceneMatrix& a, CRef<VecX> b, Eigen::Ref<VecX> 
                    "PCG: the initial residual is not finite (rᵀr = " << rr << ", rᵀz = " << rz << ")");
         component.r_norm = std::sqrt(rr);
         component.rz = rz;
-        component.active = component.r_norm > settings.tolerance * component.b_norm && settings.max_iterations > 0;
+        component.active = component.r_norm > stop * component.b_norm && settings.max_iterations > 0;
     }
     m_p = m_z;
 
@@ -191,7 +197,7 @@ PcgResult PcgSolver::solve(const SceneMatrix& a, CRef<VecX> b, Eigen::Ref<VecX> 
                        "PCG: the residual is not finite at iteration " << component.iterations);
             ++component.iterations;
             component.r_norm = std::sqrt(rr);
-            if (component.r_norm <= settings.tolerance * component.b_norm ||
+            if (component.r_norm <= stop * component.b_norm ||
                 component.iterations >= settings.max_iterations) {
                 component.active = false;
                 continue;
@@ -209,7 +215,7 @@ PcgResult PcgSolver::solve(const SceneMatrix& a, CRef<VecX> b, Eigen::Ref<VecX> 
         const double residual = component.b_norm > 0.0 ? component.r_norm / component.b_norm : 0.0;
         result.iterations = std::max(result.iterations, component.iterations);
         result.residual = std::max(result.residual, residual);
-        result.converged = result.converged && residual <= settings.tolerance;
+        result.converged = result.converged && residual <= stop;
     }
     return result;
 }
