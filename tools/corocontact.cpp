@@ -11,6 +11,7 @@
 #include <corocontact/core/surface_topology.hpp>
 #include <corocontact/io/case_reader.hpp>
 #include <corocontact/io/mesh_readers.hpp>
+#include <corocontact/io/output_file.hpp>
 #include <corocontact/io/output_lock.hpp>
 #include <corocontact/io/run_files.hpp>
 #include <corocontact/io/scene_loader.hpp>
@@ -36,14 +37,17 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cerrno>
 #include <charconv>
 #include <chrono>
 #include <csignal>
 #include <cstdio>
+#include <cstring>
 #include <iostream>
 #include <limits>
 #include <memory>
 #include <set>
+#include <sstream>
 
 namespace {
 
@@ -115,6 +119,28 @@ const char* signal_name(int signal_number)
 std::string count_of(std::size_t n, const char* one, const char* many)
 {
     return std::to_string(n) + " " + (n == 1 ? one : many);
+}
+
+/// Flushes stdout and checks it: stdout is buffered, so a failed write (a full disk, a closed
+/// descriptor) shows only at a flush or in its error flag. Every command ends with it.
+/// @throws OutputError "writing to standard output: <strerror>"
+void flush_stdout()
+{
+    errno = 0;
+    const bool flushed = std::fflush(stdout) == 0;
+    const int error = errno;
+    CORO_CHECK(flushed && !std::ferror(stdout), OutputError,
+               "writing to standard output: " << (error != 0 ? std::strerror(error) : "an earlier write failed"));
+}
+
+/// Writes `text` to stdout now, checked (a CSV larger than stdout's buffer fails at the write).
+void write_stdout(const std::string& text)
+{
+    if (std::fwrite(text.data(), 1, text.size(), stdout) != text.size()) {
+        const int error = errno;
+        CORO_THROW(OutputError, "writing to standard output: " << std::strerror(error));
+    }
+    flush_stdout();
 }
 
 int run_case(const RunOptions& options)
@@ -273,7 +299,7 @@ int run_case(const RunOptions& options)
                 writer.pvd_path().string().c_str(), summary_path.string().c_str());
     if (checkpoints)
         std::printf("  checkpoint: %s\n", checkpoint_path.string().c_str());
-    std::fflush(stdout);
+    flush_stdout();
     if (summary.stop_signal != 0) {
         std::fprintf(stderr, "%s: interrupted by %s at step %d of %d; frames, series and summary are complete up to it\n",
                      spec.simulation.name.c_str(), signal_name(summary.stop_signal), static_cast<int>(summary.steps),
@@ -354,9 +380,9 @@ int detect_case(const DetectOptions& options)
 #endif
     const std::string csv = coro::contacts_csv(surfaces, points);
     if (options.csv == "-")
-        std::fputs(csv.c_str(), stdout);
+        write_stdout(csv);
     else if (!options.csv.empty())
-        coro::write_file_atomically(options.csv, csv);
+        coro::write_output_file(options.csv, csv);
     return 0;
 }
 
@@ -511,8 +537,16 @@ int main(int argc, char** argv)
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& error) {
-        const int code = app.exit(error);
-        return code == 0 ? 0 : EXIT_BAD_INPUT;
+        std::ostringstream help; // --help, --version: written to stdout, checked
+        if (app.exit(error, help) != 0)
+            return EXIT_BAD_INPUT;
+        try {
+            write_stdout(help.str());
+        } catch (const coro::OutputError& output_error) {
+            std::cerr << "error: " << output_error.what() << "\n";
+            return EXIT_OUTPUT_FAILED;
+        }
+        return 0;
     }
 
     if (verbose)
@@ -527,16 +561,20 @@ int main(int argc, char** argv)
                       << " threads at once; using " << threads_used() << "\n";
     }
     try {
-        if (run_command->parsed())
-            return run_case(run);
-        if (detect_command->parsed())
-            return detect_case(detect);
-        if (is_surface_file(mesh_path)) {
+        int code = 0;
+        if (run_command->parsed()) {
+            code = run_case(run);
+        } else if (detect_command->parsed()) {
+            code = detect_case(detect);
+        } else if (is_surface_file(mesh_path)) {
             CORO_CHECK(parts == 0, InputError,
                        "--parts: " << mesh_path << " is a triangle surface; METIS parts are for tet meshes");
-            return describe_surface(mesh_path);
+            code = describe_surface(mesh_path);
+        } else {
+            code = describe_mesh(mesh_path, parts);
         }
-        return describe_mesh(mesh_path, parts);
+        flush_stdout();
+        return code;
     } catch (const coro::InputError& error) {
         std::cerr << "error: " << error.what() << "\n";
         return EXIT_BAD_INPUT;
@@ -553,3 +591,4 @@ int main(int argc, char** argv)
         return EXIT_BAD_INPUT;
     }
 }
+
