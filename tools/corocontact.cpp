@@ -147,7 +147,10 @@ int run_case(const RunOptions& options)
 {
     const auto setup_start = std::chrono::steady_clock::now();
     coro::cli::Progress progress(!options.quiet, isatty(STDERR_FILENO) != 0);
-    coro::CaseSpec spec = coro::read_case(options.case_file);
+    std::vector<std::string> notes;
+    coro::CaseSpec spec = coro::read_case(options.case_file, notes);
+    for (const std::string& note : notes)
+        std::cerr << "note: " << note << "\n";
     if (!options.out.empty())
         spec.simulation.output_dir = options.out;
     if (options.steps > 0) {

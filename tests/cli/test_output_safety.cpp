@@ -25,6 +25,7 @@ namespace fs = std::filesystem;
 using ::testing::AllOf;
 using ::testing::HasSubstr;
 using ::testing::IsEmpty;
+using ::testing::Not;
 using ::testing::StartsWith;
 using coro::test::expect_every_listed_frame_loads;
 using coro::test::listed_frames;
@@ -283,6 +284,19 @@ TEST(CorocontactCommandLine, StepsOfAStaticCaseAreNotSilentlyIgnored)
     EXPECT_FALSE(fs::exists(dir / "o"));
     outcome = run("run " + case_file.string() + " --quiet --out " + (dir / "o").string(), dir);
     EXPECT_EQ(outcome.exit_code, 0) << outcome.err;
+    EXPECT_THAT(outcome.err, Not(HasSubstr("note:")));
+
+    // The time-step keys in a static case file: a note names them, and the run goes on.
+    const fs::path with_steps = coro::test::write_text(
+        dir / "static_steps.toml", "[simulation]\nanalysis = \"static\"\nload_steps = 2\nsteps = 3\ndt = 0.1\n"
+                                   "output_every = 7\n[[body]]\nshape = \"box\"\n[[body.fixed]]\nmax = [0.0, 1e9, 1e9]\n");
+    outcome = run("run " + with_steps.string() + " --quiet --out " + (dir / "o2").string(), dir);
+    EXPECT_EQ(outcome.exit_code, 0) << outcome.err;
+    EXPECT_THAT(outcome.err, HasSubstr("note: " + with_steps.string() +
+                                       ":5:1: simulation.dt, simulation.steps and simulation.output_every are not used "
+                                       "by a static analysis, which has no time steps: it runs simulation.load_steps = "
+                                       "2 load steps and writes every one\n"));
+    EXPECT_EQ(listed_frames(dir / "o2" / "static_steps.pvd").size(), 3u) << "load steps 0, 1 and 2";
 }
 
 TEST(CorocontactLoad, ASceneBeyondTheMemoryLimitIsRefusedNamingTheKey)
