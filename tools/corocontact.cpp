@@ -463,6 +463,12 @@ int describe_mesh(const std::string& path, int parts)
     std::printf("  quality (mean ratio, 1 = regular): min %.4f, mean %.4f\n", q_min, q_sum / mesh.num_tets());
     std::printf("  reoriented tets %d, nodes in no tet %zu\n", reoriented, coro::unreferenced_vertices(mesh).size());
     std::printf("  boundary surface %s\n", describe_topology(topology).c_str());
+    if (parts > mesh.num_tets()) {
+        std::fprintf(stderr, "note: --parts %d: the mesh has %s, and a part holds at least one; using %d parts\n",
+                     parts, count_of(static_cast<std::size_t>(mesh.num_tets()), "tet", "tets").c_str(),
+                     mesh.num_tets());
+        parts = mesh.num_tets();
+    }
     if (parts > 0) {
         const coro::TetPartition partition = coro::partition_tets(mesh.tets, mesh.num_vertices(), parts);
         const coro::PartLayout layout = coro::make_part_layout(mesh.tets, mesh.num_vertices(), partition);
