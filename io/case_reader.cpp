@@ -237,9 +237,12 @@ bool is_valid_name(const std::string& name)
 
 constexpr const char* NAME_RULE = "a name of 1 to 128 letters, digits, '_', '.' and '-'";
 
-/// " (300 characters)" for a name that is too long, else "".
-std::string length_note(const std::string& name)
+/// Why a name made of allowed characters is still refused: " (300 characters)" for one that is
+/// too long; for "." and "..", that they name folders. Else "".
+std::string name_note(const std::string& name)
 {
+    if (name == "." || name == "..")
+        return " (\".\" and \"..\" are not allowed: they name the current and the parent folder)";
     return name.size() > MAX_NAME_LENGTH ? " (" + std::to_string(name.size()) + " characters)" : "";
 }
 
@@ -603,7 +606,7 @@ void read_simulation(const TableReader& root, const fs::path& file, CaseSpec& sp
         if (!is_valid_name(*name))
             CORO_CASE_ERROR(t.ctx(), t.find("name")->source(), "simulation.name",
                             "expected " << NAME_RULE << " (it becomes a file name), found "
-                                        << describe(*t.find("name")) << length_note(*name));
+                                        << describe(*t.find("name")) << name_note(*name));
         s.name = *name;
     } else {
         s.name = file.stem().string();
@@ -782,7 +785,7 @@ BodySpec read_body(const TableReader& t, Index k)
         if (!is_valid_name(*name))
             CORO_CASE_ERROR(t.ctx(), t.find("name")->source(), t.full("name"),
                             "expected " << NAME_RULE << ", found " << describe(*t.find("name"))
-                                        << length_note(*name));
+                                        << name_note(*name));
         body.name = *name;
     } else {
         body.name = "body" + std::to_string(k);
