@@ -230,7 +230,9 @@ int run_case(const RunOptions& options)
                                                                 !options.restart.empty());
     if (removed.files > 0 && !options.quiet)
         std::cerr << "removed " << removed.files << " files (" << removed.frames << " frames) of an earlier run of "
-                  << spec.simulation.name << " from " << out_dir.string() << "\n";
+                  << spec.simulation.name << " from " << out_dir.string()
+                  << (removed.checkpoint ? ", its checkpoint among them (a run without --restart starts over)" : "")
+                  << "\n";
     coro::VtkSeriesWriter writer(out_dir, spec.simulation.name);
     for (const coro::FrameRecord& frame : frames)
         writer.adopt_frame(frame.step, frame.time);
