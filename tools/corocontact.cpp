@@ -543,6 +543,7 @@ int main(int argc, char** argv)
     info_command->add_option("--parts", parts, "tet mesh: also partition into K METIS parts: edge-cut and balance")
         ->check(whole_number(1, INDEX_MAX));
     verbose_flag(info_command, "");
+    threads_option(info_command); // after the command too, as run and detect take it
     info_command->set_version_flag("--version", std::string("corocontact ") + CORO_VERSION);
 
     try {

@@ -439,7 +439,8 @@ TEST(CorocontactInfo, DescribesAMesh)
     ASSERT_EQ(outcome.exit_code, 0) << outcome.err;
     EXPECT_THAT(outcome.out, HasSubstr("nodes 76, tets 172"));
     EXPECT_THAT(outcome.out, HasSubstr("closed, consistently oriented, 1 piece, Euler characteristic 2, genus 0"));
-    const Outcome parts = run(std::string("info ") + CORO_TEST_DATA_DIR + "/msh/cube_v41.msh --parts 3", dir);
+    // --threads after the command, as run and detect take it.
+    const Outcome parts = run(std::string("info ") + CORO_TEST_DATA_DIR + "/msh/cube_v41.msh --parts 3 --threads 1", dir);
     ASSERT_EQ(parts.exit_code, 0) << parts.err;
     EXPECT_THAT(parts.out, HasSubstr("METIS parts 3: edge-cut"));
     EXPECT_THAT(parts.err, Not(HasSubstr("note:")));
