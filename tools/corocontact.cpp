@@ -11,6 +11,7 @@
 #include <corocontact/core/surface_topology.hpp>
 #include <corocontact/io/case_reader.hpp>
 #include <corocontact/io/mesh_readers.hpp>
+#include <corocontact/io/output_file.hpp>
 #include <corocontact/io/output_lock.hpp>
 #include <corocontact/io/run_files.hpp>
 #include <corocontact/io/scene_loader.hpp>
@@ -36,14 +37,17 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cerrno>
 #include <charconv>
 #include <chrono>
 #include <csignal>
 #include <cstdio>
+#include <cstring>
 #include <iostream>
 #include <limits>
 #include <memory>
 #include <set>
+#include <sstream>
 
 namespace {
 
@@ -117,11 +121,36 @@ std::string count_of(std::size_t n, const char* one, const char* many)
     return std::to_string(n) + " " + (n == 1 ? one : many);
 }
 
+/// Flushes stdout and checks it: stdout is buffered, so a failed write (a full disk, a closed
+/// descriptor) shows only at a flush or in its error flag. Every command ends with it.
+/// @throws OutputError "writing to standard output: <strerror>"
+void flush_stdout()
+{
+    errno = 0;
+    const bool flushed = std::fflush(stdout) == 0;
+    const int error = errno;
+    CORO_CHECK(flushed && !std::ferror(stdout), OutputError,
+               "writing to standard output: " << (error != 0 ? std::strerror(error) : "an earlier write failed"));
+}
+
+/// Writes `text` to stdout now, checked (a CSV larger than stdout's buffer fails at the write).
+void write_stdout(const std::string& text)
+{
+    if (std::fwrite(text.data(), 1, text.size(), stdout) != text.size()) {
+        const int error = errno;
+        CORO_THROW(OutputError, "writing to standard output: " << std::strerror(error));
+    }
+    flush_stdout();
+}
+
 int run_case(const RunOptions& options)
 {
     const auto setup_start = std::chrono::steady_clock::now();
     coro::cli::Progress progress(!options.quiet, isatty(STDERR_FILENO) != 0);
-    coro::CaseSpec spec = coro::read_case(options.case_file);
+    std::vector<std::string> notes;
+    coro::CaseSpec spec = coro::read_case(options.case_file, notes);
+    for (const std::string& note : notes)
+        std::cerr << "note: " << note << "\n";
     if (!options.out.empty())
         spec.simulation.output_dir = options.out;
     if (options.steps > 0) {
@@ -201,7 +230,9 @@ int run_case(const RunOptions& options)
                                                                 !options.restart.empty());
     if (removed.files > 0 && !options.quiet)
         std::cerr << "removed " << removed.files << " files (" << removed.frames << " frames) of an earlier run of "
-                  << spec.simulation.name << " from " << out_dir.string() << "\n";
+                  << spec.simulation.name << " from " << out_dir.string()
+                  << (removed.checkpoint ? ", its checkpoint among them (a run without --restart starts over)" : "")
+                  << "\n";
     coro::VtkSeriesWriter writer(out_dir, spec.simulation.name);
     for (const coro::FrameRecord& frame : frames)
         writer.adopt_frame(frame.step, frame.time);
@@ -273,7 +304,7 @@ int run_case(const RunOptions& options)
                 writer.pvd_path().string().c_str(), summary_path.string().c_str());
     if (checkpoints)
         std::printf("  checkpoint: %s\n", checkpoint_path.string().c_str());
-    std::fflush(stdout);
+    flush_stdout();
     if (summary.stop_signal != 0) {
         std::fprintf(stderr, "%s: interrupted by %s at step %d of %d; frames, series and summary are complete up to it\n",
                      spec.simulation.name.c_str(), signal_name(summary.stop_signal), static_cast<int>(summary.steps),
@@ -354,9 +385,9 @@ int detect_case(const DetectOptions& options)
 #endif
     const std::string csv = coro::contacts_csv(surfaces, points);
     if (options.csv == "-")
-        std::fputs(csv.c_str(), stdout);
+        write_stdout(csv);
     else if (!options.csv.empty())
-        coro::write_file_atomically(options.csv, csv);
+        coro::write_output_file(options.csv, csv);
     return 0;
 }
 
@@ -434,6 +465,12 @@ int describe_mesh(const std::string& path, int parts)
     std::printf("  quality (mean ratio, 1 = regular): min %.4f, mean %.4f\n", q_min, q_sum / mesh.num_tets());
     std::printf("  reoriented tets %d, nodes in no tet %zu\n", reoriented, coro::unreferenced_vertices(mesh).size());
     std::printf("  boundary surface %s\n", describe_topology(topology).c_str());
+    if (parts > mesh.num_tets()) {
+        std::fprintf(stderr, "note: --parts %d: the mesh has %s, and a part holds at least one; using %d parts\n",
+                     parts, count_of(static_cast<std::size_t>(mesh.num_tets()), "tet", "tets").c_str(),
+                     mesh.num_tets());
+        parts = mesh.num_tets();
+    }
     if (parts > 0) {
         const coro::TetPartition partition = coro::partition_tets(mesh.tets, mesh.num_vertices(), parts);
         const coro::PartLayout layout = coro::make_part_layout(mesh.tets, mesh.num_vertices(), partition);
@@ -506,13 +543,22 @@ int main(int argc, char** argv)
     info_command->add_option("--parts", parts, "tet mesh: also partition into K METIS parts: edge-cut and balance")
         ->check(whole_number(1, INDEX_MAX));
     verbose_flag(info_command, "");
+    threads_option(info_command); // after the command too, as run and detect take it
     info_command->set_version_flag("--version", std::string("corocontact ") + CORO_VERSION);
 
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& error) {
-        const int code = app.exit(error);
-        return code == 0 ? 0 : EXIT_BAD_INPUT;
+        std::ostringstream help; // --help, --version: written to stdout, checked
+        if (app.exit(error, help) != 0)
+            return EXIT_BAD_INPUT;
+        try {
+            write_stdout(help.str());
+        } catch (const coro::OutputError& output_error) {
+            std::cerr << "error: " << output_error.what() << "\n";
+            return EXIT_OUTPUT_FAILED;
+        }
+        return 0;
     }
 
     if (verbose)
@@ -527,16 +573,20 @@ int main(int argc, char** argv)
                       << " threads at once; using " << threads_used() << "\n";
     }
     try {
-        if (run_command->parsed())
-            return run_case(run);
-        if (detect_command->parsed())
-            return detect_case(detect);
-        if (is_surface_file(mesh_path)) {
+        int code = 0;
+        if (run_command->parsed()) {
+            code = run_case(run);
+        } else if (detect_command->parsed()) {
+            code = detect_case(detect);
+        } else if (is_surface_file(mesh_path)) {
             CORO_CHECK(parts == 0, InputError,
                        "--parts: " << mesh_path << " is a triangle surface; METIS parts are for tet meshes");
-            return describe_surface(mesh_path);
+            code = describe_surface(mesh_path);
+        } else {
+            code = describe_mesh(mesh_path, parts);
         }
-        return describe_mesh(mesh_path, parts);
+        flush_stdout();
+        return code;
     } catch (const coro::InputError& error) {
         std::cerr << "error: " << error.what() << "\n";
         return EXIT_BAD_INPUT;
@@ -553,3 +603,4 @@ int main(int argc, char** argv)
         return EXIT_BAD_INPUT;
     }
 }
+

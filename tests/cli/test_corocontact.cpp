@@ -30,6 +30,7 @@
 
 namespace fs = std::filesystem;
 using ::testing::HasSubstr;
+using ::testing::Not;
 using coro::test::listed_frames;
 using coro::test::Outcome;
 using coro::test::run;
@@ -438,9 +439,17 @@ TEST(CorocontactInfo, DescribesAMesh)
     ASSERT_EQ(outcome.exit_code, 0) << outcome.err;
     EXPECT_THAT(outcome.out, HasSubstr("nodes 76, tets 172"));
     EXPECT_THAT(outcome.out, HasSubstr("closed, consistently oriented, 1 piece, Euler characteristic 2, genus 0"));
-    const Outcome parts = run(std::string("info ") + CORO_TEST_DATA_DIR + "/msh/cube_v41.msh --parts 3", dir);
+    // --threads after the command, as run and detect take it.
+    const Outcome parts = run(std::string("info ") + CORO_TEST_DATA_DIR + "/msh/cube_v41.msh --parts 3 --threads 1", dir);
     ASSERT_EQ(parts.exit_code, 0) << parts.err;
     EXPECT_THAT(parts.out, HasSubstr("METIS parts 3: edge-cut"));
+    EXPECT_THAT(parts.err, Not(HasSubstr("note:")));
+    // More parts than tets: capped at one tet per part, and said so.
+    const Outcome capped = run(std::string("info ") + CORO_TEST_DATA_DIR + "/msh/cube_v41.msh --parts 1000000000", dir);
+    ASSERT_EQ(capped.exit_code, 0) << capped.err;
+    EXPECT_THAT(capped.err, HasSubstr("note: --parts 1000000000: the mesh has 172 tets, and a part holds at least one; "
+                                      "using 172 parts"));
+    EXPECT_THAT(capped.out, HasSubstr("METIS parts 172: edge-cut"));
     EXPECT_EQ(run("info " + (dir / "absent.msh").string(), dir).exit_code, 2);
 }
 

@@ -623,6 +623,7 @@ INSTANTIATE_TEST_SUITE_P(
         BadValue{"LoadForceNan", body("[[body.load]]\nforce = [0, 0, nan]"), "case.toml:4:16: body[0].load[0].force[2]:", "finite"},
         BadValue{"PlaneNormalZero", BOX + "[[obstacle]]\nnormal = [0, 0, 0]\n", "case.toml:4:10: obstacle[0].normal:", "expected a nonzero vector"},
         BadValue{"BodyNameInvalid", body("name = \"a,b\""), "case.toml:3:8: body[0].name:", "letters, digits"},
+        BadValue{"BodyNameDotDot", body("name = \"..\""), "case.toml:3:8: body[0].name:", "found the string \"..\" (\".\" and \"..\" are not allowed: they name the current and the parent folder)"},
         BadValue{"BodyNameTooLong", body("name = \"" + std::string(200, 'b') + "\""), "case.toml:3:8: body[0].name:", "1 to 128 letters, digits, '_', '.' and '-', found the string \"bbb"},
         BadValue{"MeshEmpty", "[[body]]\nmesh = \"\"\n", "case.toml:2:8: body[0].mesh:", "empty"}),
     [](const ::testing::TestParamInfo<BadValue>& param_info) { return param_info.param.name; });
