@@ -6,6 +6,7 @@
 #include <corocontact/contact/detector.hpp>
 
 #include "clear_edge_groups.hpp"
+#include "reused_list.hpp"
 
 #include <tbb/enumerable_thread_specific.h>
 
@@ -26,10 +27,18 @@ struct GroupedAnswers {
     std::vector<double> path;       ///< size n with distance bounds, else empty
 };
 
+/// The working memory of grouped_inside_tests(), kept from call to call.
+struct GroupingScratch {
+    tbb::enumerable_thread_specific<GroupScratch> groups; ///< per thread, for clear_edge_groups()
+    ReusedList<GroupedAnswers> answers;                   ///< per pair of candidates
+    std::vector<std::size_t> slot_pairs_of;               ///< per pair of candidates
+};
+
 /// For each pair (a, b) of `pairs`, overlapping_slots() of a's tree and b's over the overlap of
 /// their boxes when either surface is closed (else none), as TBB tasks.
-std::vector<SlotPairs> overlapping_slot_pairs(const std::vector<ContactSurface>& surfaces,
-                                              const std::vector<std::pair<Index, Index>>& pairs);
+/// @param[out] slot_pairs  one per pair
+void overlapping_slot_pairs(const std::vector<ContactSurface>& surfaces,
+                            const std::vector<std::pair<Index, Index>>& pairs, ReusedList<SlotPairs>& slot_pairs);
 
 /// Exact-mode answers for every candidate vertex, handed over pair by pair: use(k, answers) for
 /// candidates[k].vertices, called once per pair from that pair's TBB task (pairs run in parallel;
@@ -41,7 +50,7 @@ std::vector<SlotPairs> overlapping_slot_pairs(const std::vector<ContactSurface>&
 ///                        in their order
 void grouped_inside_tests(const std::vector<ContactSurface>& surfaces, const std::vector<PairCandidates>& candidates,
                           const std::vector<SlotPairs>& slot_pairs, const AxisRayTolerances& tolerances,
-                          bool distance_bounds, tbb::enumerable_thread_specific<GroupScratch>& scratch,
+                          bool distance_bounds, GroupingScratch& scratch,
                           const std::function<void(std::size_t pair, const GroupedAnswers& answers)>& use);
 
 /// The surface distance bound of candidate i of `answers` that was not tested: the bound of its
