@@ -77,16 +77,17 @@ void overlapping_surfaces(const std::vector<ContactSurface>& surfaces, detail::D
 const std::vector<PairCandidates>& pair_candidates(const std::vector<ContactSurface>& surfaces, DetectionMode mode,
                                                    detail::DetectionState& state)
 {
-    const std::vector<std::pair<Index, Index>>& pairs = state.pairs;
     const auto box = [&](Index s) { return surfaces[static_cast<std::size_t>(s)].tree.bounds(); };
-    std::vector<PairCandidates>& candidates = state.candidates.resize(2 * pairs.size());
-    for (std::size_t k = 0; k < pairs.size(); ++k) {
-        const auto [a, b] = pairs[k];
-        candidates[2 * k].body = a;
-        candidates[2 * k].other = b;
-        candidates[2 * k + 1].body = b;
-        candidates[2 * k + 1].other = a;
+    // Both directions of each pair, ordered by (body, other).
+    state.directed.clear();
+    for (const auto& [a, b] : state.pairs) {
+        state.directed.emplace_back(a, b);
+        state.directed.emplace_back(b, a);
     }
+    std::sort(state.directed.begin(), state.directed.end());
+    std::vector<PairCandidates>& candidates = state.candidates.assign(state.directed);
+    for (std::size_t k = 0; k < candidates.size(); ++k)
+        std::tie(candidates[k].body, candidates[k].other) = state.directed[k];
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, candidates.size(), 1),
                       [&](const tbb::blocked_range<std::size_t>& range) {
                           std::vector<Index>& overlapping = state.overlapping_faces.local();
@@ -109,10 +110,6 @@ const std::vector<PairCandidates>& pair_candidates(const std::vector<ContactSurf
                               }
                           }
                       });
-    // Ordered by (body, other): the pairs are sorted by (min, max); reorder both directions.
-    std::sort(candidates.begin(), candidates.end(), [](const PairCandidates& x, const PairCandidates& y) {
-        return std::tie(x.body, x.other) < std::tie(y.body, y.other);
-    });
     return candidates;
 }
 

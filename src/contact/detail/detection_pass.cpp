@@ -73,26 +73,18 @@ DetectionPass::DetectionPass(const std::vector<ContactSurface>& surfaces, const 
 
 void DetectionPass::keep_last_faces()
 {
-    // Both lists are ordered by (body, other): a merge passes each entry of the last detection to
-    // the same pair now, if there is one.
-    std::vector<LastFaces>& last = m_state.last_faces.items();
-    std::vector<LastFaces>& next = m_state.next_last_faces.resize(m_candidates.size());
-    std::size_t j = 0;
+    CORO_ASSERT(m_state.directed.size() == m_candidates.size());
+    std::vector<LastFaces>& last_faces = m_state.last_faces.assign(m_state.directed);
     for (std::size_t k = 0; k < m_candidates.size(); ++k) {
         const PairCandidates& pair = m_candidates[k];
-        const auto key = std::tie(pair.body, pair.other);
-        while (j < last.size() && std::tie(last[j].body, last[j].other) < key)
-            ++j;
-        LastFaces& faces = next[k];
-        if (j < last.size() && std::tie(last[j].body, last[j].other) == key)
-            faces.face.swap(last[j].face);
-        else
-            faces.face.clear(); // a buffer of another pair
-        faces.body = pair.body;
-        faces.other = pair.other;
+        LastFaces& faces = last_faces[k];
+        if (faces.body != pair.body || faces.other != pair.other) { // a new pair: no starts yet
+            faces.body = pair.body;
+            faces.other = pair.other;
+            faces.face.clear();
+        }
         faces.face.resize(static_cast<std::size_t>(m_surfaces[static_cast<std::size_t>(pair.body)].vertices.rows()), -1);
     }
-    std::swap(m_state.last_faces, m_state.next_last_faces);
 }
 
 template <class Start>

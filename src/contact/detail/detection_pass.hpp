@@ -48,7 +48,7 @@ private:
     void count(Index candidates, Index inside, Index on_surface, Index fallbacks, Index by_neighbour);
     /// The points of the inside slots, sorted (a counting sort by vertex per body).
     void sorted_points(std::vector<ContactPoint>& points);
-    /// The last detection's starts of the depth searches passed to the same pairs now.
+    /// The starts of the depth searches: the last detection's for the pairs it had, none for new ones.
     void keep_last_faces();
 
     const std::vector<ContactSurface>& m_surfaces;

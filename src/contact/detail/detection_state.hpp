@@ -9,7 +9,7 @@
 #include "clear_edge_groups.hpp"
 #include "grouped_inside_tests.hpp"
 #include "nearest_search.hpp"
-#include "reused_list.hpp"
+#include "pair_buffers.hpp"
 
 #include <tbb/enumerable_thread_specific.h>
 
@@ -40,9 +40,10 @@ public:
     std::vector<Aabb> boxes;                   ///< per surface, its tree's bounds
     std::vector<Index> sweep_order;            ///< overlapping_pairs()' working memory
     std::vector<std::pair<Index, Index>> pairs; ///< the overlapping surfaces (body < other)
-    ReusedList<PairCandidates> candidates;     ///< both directions of each pair, by (body, other)
+    std::vector<std::pair<Index, Index>> directed; ///< both directions of each pair, ascending
+    PairBuffers<PairCandidates> candidates;    ///< per entry of `directed`
     tbb::enumerable_thread_specific<std::vector<Index>> overlapping_faces; ///< per thread (paper mode)
-    ReusedList<SlotPairs> slot_pairs;          ///< per pair: overlapping_slot_pairs()
+    PairBuffers<SlotPairs> slot_pairs;         ///< per entry of `pairs`: overlapping_slot_pairs()
     GroupingScratch grouping;                  ///< grouped_inside_tests()' working memory
     std::vector<CandidateBlock> blocks;        ///< the tasks of a pass without groups
 
@@ -54,10 +55,8 @@ public:
     std::vector<ContactPoint> slots;   ///< per slot, with contact data: the inside vertices' points
     std::vector<Index> count;          ///< per vertex of one body: the sort's counts
     std::vector<std::array<std::uint32_t, 2>> order; ///< the inside (pair, candidate) of one body, sorted
-    /// Per candidate pair of the last detection, in its order: where its searches start. Its
-    /// entries pass to the same pairs of the next detection (those of pairs apart now are dropped).
-    ReusedList<LastFaces> last_faces;
-    ReusedList<LastFaces> next_last_faces; ///< the next detection's, while they are sorted out
+    /// Per entry of `directed`: where its searches start, kept while the pair lasts.
+    PairBuffers<LastFaces> last_faces;
 };
 
 struct ScratchAccess {

@@ -22,9 +22,9 @@ constexpr std::size_t TEST_BLOCK = 256;
 } // namespace
 
 void overlapping_slot_pairs(const std::vector<ContactSurface>& surfaces,
-                            const std::vector<std::pair<Index, Index>>& pairs, ReusedList<SlotPairs>& slot_pairs)
+                            const std::vector<std::pair<Index, Index>>& pairs, PairBuffers<SlotPairs>& slot_pairs)
 {
-    std::vector<SlotPairs>& out = slot_pairs.resize(pairs.size());
+    std::vector<SlotPairs>& out = slot_pairs.assign(pairs);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, pairs.size(), 1), [&](const tbb::blocked_range<std::size_t>& r) {
         for (std::size_t j = r.begin(); j < r.end(); ++j) {
             const ContactSurface& a = surfaces[static_cast<std::size_t>(pairs[j].first)];
@@ -68,7 +68,10 @@ void grouped_inside_tests(const std::vector<ContactSurface>& surfaces, const std
     // nested tasks when there are many) and their use, where the rest of each group take them.
     // The answers of a pair have their own buffers: while a task waits for its nested tasks, its
     // thread may take up another pair.
-    std::vector<GroupedAnswers>& answers_of = scratch.answers.resize(pairs);
+    scratch.keys.clear();
+    for (const PairCandidates& pair : candidates)
+        scratch.keys.emplace_back(pair.body, pair.other);
+    std::vector<GroupedAnswers>& answers_of = scratch.answers.assign(scratch.keys);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, pairs, 1), [&](const tbb::blocked_range<std::size_t>& r) {
         for (std::size_t k = r.begin(); k < r.end(); ++k) {
             GroupedAnswers& answers = answers_of[k];

@@ -6,7 +6,7 @@
 #include <corocontact/contact/detector.hpp>
 
 #include "clear_edge_groups.hpp"
-#include "reused_list.hpp"
+#include "pair_buffers.hpp"
 
 #include <tbb/enumerable_thread_specific.h>
 
@@ -30,7 +30,8 @@ struct GroupedAnswers {
 /// The working memory of grouped_inside_tests(), kept from call to call.
 struct GroupingScratch {
     tbb::enumerable_thread_specific<GroupScratch> groups; ///< per thread, for clear_edge_groups()
-    ReusedList<GroupedAnswers> answers;                   ///< per pair of candidates
+    std::vector<std::pair<Index, Index>> keys;            ///< per pair of candidates: (body, other)
+    PairBuffers<GroupedAnswers> answers;                  ///< per pair of candidates
     std::vector<std::size_t> slot_pairs_of;               ///< per pair of candidates
 };
 
@@ -38,7 +39,7 @@ struct GroupingScratch {
 /// their boxes when either surface is closed (else none), as TBB tasks.
 /// @param[out] slot_pairs  one per pair
 void overlapping_slot_pairs(const std::vector<ContactSurface>& surfaces,
-                            const std::vector<std::pair<Index, Index>>& pairs, ReusedList<SlotPairs>& slot_pairs);
+                            const std::vector<std::pair<Index, Index>>& pairs, PairBuffers<SlotPairs>& slot_pairs);
 
 /// Exact-mode answers for every candidate vertex, handed over pair by pair: use(k, answers) for
 /// candidates[k].vertices, called once per pair from that pair's TBB task (pairs run in parallel;
