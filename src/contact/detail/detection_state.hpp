@@ -43,7 +43,7 @@ public:
     std::vector<std::pair<Index, Index>> directed; ///< both directions of each pair, ascending
     PairBuffers<PairCandidates> candidates;    ///< per entry of `directed`
     tbb::enumerable_thread_specific<std::vector<Index>> overlapping_faces; ///< per thread (paper mode)
-    PairBuffers<SlotPairs> slot_pairs;         ///< per entry of `pairs`: overlapping_slot_pairs()
+    PairBuffers<PairSlots> slot_pairs;         ///< per entry of `pairs`: overlapping_slot_pairs()
     GroupingScratch grouping;                  ///< grouped_inside_tests()' working memory
     std::vector<CandidateBlock> blocks;        ///< the tasks of a pass without groups
 

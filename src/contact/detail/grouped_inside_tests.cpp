@@ -22,23 +22,24 @@ constexpr std::size_t TEST_BLOCK = 256;
 } // namespace
 
 void overlapping_slot_pairs(const std::vector<ContactSurface>& surfaces,
-                            const std::vector<std::pair<Index, Index>>& pairs, PairBuffers<SlotPairs>& slot_pairs)
+                            const std::vector<std::pair<Index, Index>>& pairs, PairBuffers<PairSlots>& slot_pairs)
 {
-    std::vector<SlotPairs>& out = slot_pairs.assign(pairs);
+    std::vector<PairSlots>& out = slot_pairs.assign(pairs);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, pairs.size(), 1), [&](const tbb::blocked_range<std::size_t>& r) {
         for (std::size_t j = r.begin(); j < r.end(); ++j) {
             const ContactSurface& a = surfaces[static_cast<std::size_t>(pairs[j].first)];
             const ContactSurface& b = surfaces[static_cast<std::size_t>(pairs[j].second)];
             if (a.closed || b.closed)
-                overlapping_slots(a.tree, b.tree, a.tree.bounds().intersection(b.tree.bounds()), out[j]);
+                overlapping_slots(a.tree, b.tree, a.tree.bounds().intersection(b.tree.bounds()), out[j].pairs,
+                                  out[j].walk);
             else
-                out[j].clear();
+                out[j].pairs.clear();
         }
     });
 }
 
 void grouped_inside_tests(const std::vector<ContactSurface>& surfaces, const std::vector<PairCandidates>& candidates,
-                          const std::vector<SlotPairs>& slot_pairs, const AxisRayTolerances& tolerances,
+                          const std::vector<PairSlots>& slot_pairs, const AxisRayTolerances& tolerances,
                           bool distance_bounds, GroupingScratch& scratch,
                           const std::function<void(std::size_t pair, const GroupedAnswers& answers)>& use)
 {
@@ -85,7 +86,7 @@ void grouped_inside_tests(const std::vector<ContactSurface>& surfaces, const std
             if (!distance_bounds)
                 answers.path.clear();
             if (other.closed) {
-                clear_edge_groups(body, other, slot_pairs[pair_of[k]],
+                clear_edge_groups(body, other, slot_pairs[pair_of[k]].pairs,
                                   pair.body < pair.other ? PairColumn::FIRST : PairColumn::SECOND, pair.vertices,
                                   scratch.groups.local(), group, tested, distance_bounds ? &answers.path : nullptr);
             } else {

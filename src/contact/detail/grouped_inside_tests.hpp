@@ -7,6 +7,7 @@
 
 #include "clear_edge_groups.hpp"
 #include "pair_buffers.hpp"
+#include "tree_access.hpp"
 
 #include <tbb/enumerable_thread_specific.h>
 
@@ -27,6 +28,12 @@ struct GroupedAnswers {
     std::vector<double> path;       ///< size n with distance bounds, else empty
 };
 
+/// The face pairs of two surfaces (overlapping_slots()) and the working memory that finds them.
+struct PairSlots {
+    SlotPairs pairs;
+    SlotWalkScratch walk;
+};
+
 /// The working memory of grouped_inside_tests(), kept from call to call.
 struct GroupingScratch {
     tbb::enumerable_thread_specific<GroupScratch> groups; ///< per thread, for clear_edge_groups()
@@ -39,7 +46,7 @@ struct GroupingScratch {
 /// their boxes when either surface is closed (else none), as TBB tasks.
 /// @param[out] slot_pairs  one per pair
 void overlapping_slot_pairs(const std::vector<ContactSurface>& surfaces,
-                            const std::vector<std::pair<Index, Index>>& pairs, PairBuffers<SlotPairs>& slot_pairs);
+                            const std::vector<std::pair<Index, Index>>& pairs, PairBuffers<PairSlots>& slot_pairs);
 
 /// Exact-mode answers for every candidate vertex, handed over pair by pair: use(k, answers) for
 /// candidates[k].vertices, called once per pair from that pair's TBB task (pairs run in parallel;
@@ -50,7 +57,7 @@ void overlapping_slot_pairs(const std::vector<ContactSurface>& surfaces,
 /// @param[in] slot_pairs  overlapping_slot_pairs() of the pairs (body < other) of `candidates`,
 ///                        in their order
 void grouped_inside_tests(const std::vector<ContactSurface>& surfaces, const std::vector<PairCandidates>& candidates,
-                          const std::vector<SlotPairs>& slot_pairs, const AxisRayTolerances& tolerances,
+                          const std::vector<PairSlots>& slot_pairs, const AxisRayTolerances& tolerances,
                           bool distance_bounds, GroupingScratch& scratch,
                           const std::function<void(std::size_t pair, const GroupedAnswers& answers)>& use);
 
