@@ -100,7 +100,7 @@ void Simulation::detect(RunSummary& summary)
     if (m_scene.planes.empty()) {
         m_scene.contacts.swap(m_surface_contacts);
     } else {
-        detect_plane_contacts(m_scene.surfaces, num_bodies, m_scene.planes, m_plane_contacts, m_plane_offsets);
+        detect_plane_contacts(m_scene.surfaces, num_bodies, m_scene.planes, m_plane_contacts, m_plane_scratch);
         m_scene.contacts.resize(m_surface_contacts.size() + m_plane_contacts.size());
         std::merge(m_surface_contacts.begin(), m_surface_contacts.end(), m_plane_contacts.begin(),
                    m_plane_contacts.end(), m_scene.contacts.begin(), contact_order);

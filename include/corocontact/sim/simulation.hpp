@@ -149,7 +149,7 @@ private:
     std::vector<Index> m_components;       // contact_components() of the last detection
     DetectionScratch m_detection;          // detect_contacts' working memory, kept from step to step
     std::vector<ContactPoint> m_surface_contacts, m_plane_contacts; // a detection's, before their merge
-    std::vector<std::size_t> m_plane_offsets;                      // detect_plane_contacts' working memory
+    PlaneContactScratch m_plane_scratch;                           // detect_plane_contacts' working memory
     ComponentScratch m_component_scratch;                          // contact_components' working memory
     DivergenceCheck m_divergence;          // run after every step
     Index m_step = 0;                      // steps done
