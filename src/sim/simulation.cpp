@@ -94,14 +94,18 @@ void Simulation::detect(RunSummary& summary)
         return;
     ScopedTimer timer(summary.phases.contact);
     update_contact_surfaces(m_scene.bodies, m_scene.surfaces);
-    m_scene.contacts = detect_contacts(m_scene.surfaces, detection_settings(m_spec.contact), m_detection);
-    if (!m_scene.planes.empty()) {
-        std::vector<ContactPoint> planes = detect_plane_contacts(
-            m_scene.surfaces, static_cast<Index>(m_scene.bodies.size()), m_scene.planes);
-        m_scene.contacts.insert(m_scene.contacts.end(), planes.begin(), planes.end());
-        std::sort(m_scene.contacts.begin(), m_scene.contacts.end(), contact_order);
+    // Into buffers kept from step to step: a step allocates nothing once they have grown.
+    const auto num_bodies = static_cast<Index>(m_scene.bodies.size());
+    detect_contacts(m_scene.surfaces, detection_settings(m_spec.contact), m_detection, m_surface_contacts);
+    if (m_scene.planes.empty()) {
+        m_scene.contacts.swap(m_surface_contacts);
+    } else {
+        detect_plane_contacts(m_scene.surfaces, num_bodies, m_scene.planes, m_plane_contacts, m_plane_scratch);
+        m_scene.contacts.resize(m_surface_contacts.size() + m_plane_contacts.size());
+        std::merge(m_surface_contacts.begin(), m_surface_contacts.end(), m_plane_contacts.begin(),
+                   m_plane_contacts.end(), m_scene.contacts.begin(), contact_order);
     }
-    contact_components(m_scene.surfaces, static_cast<Index>(m_scene.bodies.size()), m_components);
+    contact_components(m_scene.surfaces, num_bodies, m_component_scratch, m_components);
     m_system.matrix().set_components(m_components);
     m_response.compute(m_scene.bodies, m_scene.surfaces, m_scene.contacts, m_spec.contact, m_spec.simulation.dt,
                        m_system.matrix());

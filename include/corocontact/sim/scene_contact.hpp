@@ -7,6 +7,7 @@
 #include <corocontact/contact/detector.hpp>
 #include <corocontact/sim/case_spec.hpp>
 
+#include <utility>
 #include <vector>
 
 namespace coro {
@@ -37,6 +38,18 @@ void update_contact_surfaces(const std::vector<Body>& bodies, std::vector<Contac
 /// @param[in] num_bodies  how many of the surfaces are bodies
 /// @param[out] component_of_body  #num_bodies
 void contact_components(const std::vector<ContactSurface>& surfaces, Index num_bodies,
+                        std::vector<Index>& component_of_body);
+
+/// The working memory of contact_components(), kept from step to step: a time step passing the
+/// same one allocates nothing once it has grown to the scene.
+struct ComponentScratch {
+    std::vector<Aabb> boxes;                    ///< per body
+    std::vector<Index> sweep_order;             ///< the broad phase's working memory
+    std::vector<std::pair<Index, Index>> pairs; ///< bodies whose boxes overlap
+};
+
+/// contact_components() with the working memory `scratch`.
+void contact_components(const std::vector<ContactSurface>& surfaces, Index num_bodies, ComponentScratch& scratch,
                         std::vector<Index>& component_of_body);
 
 /// Detection settings from the case's [contact] table.
