@@ -127,6 +127,10 @@ PcgResult PcgSolver::solve(const SceneMatrix& a, CRef<VecX> b, Eigen::Ref<VecX> 
     m_q.resize(n);
     m_partials.resize(2 * at(chunks.num_chunks()));
     m_chunk_active.assign(at(chunks.num_chunks()), 1);
+    // Components come and go with contact, never more than one per body: room for that many
+    // keeps a solve free of allocations when they change.
+    m_components.reserve(at(a.num_bodies()));
+    m_totals.reserve(2 * at(a.num_bodies()));
     m_components.assign(at(a.num_components()), Component{});
 
     // ‖b_k‖ per component; a component with b_k = 0 has the solution 0 and takes no iteration.
