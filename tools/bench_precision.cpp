@@ -1,20 +1,27 @@
-// bench_precision: what single-precision matrix values would give the solve, measured before
-// BsrMatrix gets them. The SOFA beam's implicit Euler matrix (16×16×76 nodes, 101,250 tets,
-// cases/bench/sofa_beam_16x16x76.toml at its first step) is multiplied and solved by
-//   double  SceneMatrix::multiply with the chunks' pᵀq, and PcgSolver (Jacobi, tolerance 0:
-//           the 10-iteration cap), on the beam as a one-body scene
-//   float   the same upper-storage product with float values (vectors, products and sums in
-//           double; the same chunks, tasks, gathers and chunk-ordered sums), and the same PCG
-//           (three fused passes per iteration) around it
-// in one run. `--accuracy` instead solves with both to 1e-12 and prints the true residual
-// ‖b − A_double x‖/‖b‖ of each: the float values' accuracy floor.
+// bench_precision: single-precision matrix values (solver.matrix_precision = "single") against
+// double ones and against a speed-of-light kernel, on the SOFA beam (16×16×76 nodes, 101,250
+// tets, cases/bench/sofa_beam_16x16x76.toml), in one run, 2 threads by default:
+//   Spmv*    y = A x with the chunks' x·y: SceneMatrix::multiply with double and single values,
+//            and the speed-of-light kernel's float path
+//   Pcg10*   10 Jacobi-PCG iterations from x = 0 (tolerance 0): PcgSolver with double and
+//            single values, and the speed-of-light kernel's float path
+//   Step*    one whole implicit Euler step with a 10-iteration solve (SceneSystem::step:
+//            element loop, assembly, PCG, advance), double and single values
+// The speed-of-light kernel (FloatUpper, FloatPcg below) is the same upper-storage product with
+// float values and the same PCG iteration, written straight into this file without the
+// library's interfaces: what single precision can give at most. After the runs the medians are
+// compared: single against the kernel's float path and against double.
+// `--accuracy` instead prints how far single-precision values are from double ones (after
+// assembly, in a product, and in solves to convergence measured with the double matrix).
 //
 //   bench_precision [--threads N] [--accuracy] [benchmark options]     (N defaults to 2)
+//   e.g. bench_precision --benchmark_repetitions=10 --benchmark_enable_random_interleaving=true
 #include "implicit_euler_system.hpp"
 
 #include <corocontact/core/primitives.hpp>
 #include <corocontact/partition/partition.hpp>
 #include <corocontact/sim/body.hpp>
+#include <corocontact/sim/scene_system.hpp>
 #include <corocontact/solver/pcg.hpp>
 #include <corocontact/solver/row_chunks.hpp>
 #include <corocontact/solver/scene_matrix.hpp>
@@ -34,6 +41,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <map>
 #include <memory>
 #include <string>
 #include <vector>
@@ -43,15 +51,8 @@ namespace {
 using namespace coro;
 
 
-/// The beam's system at its first implicit Euler step.
-struct Beam {
-    std::unique_ptr<Body> body;
-    VecX rhs;
-};
-
-const Beam& beam()
+BodySpec beam_spec()
 {
-    static const Beam b = [] {
         BodySpec spec;
         spec.name = "beam";
         spec.material.young = 1000.0;
@@ -62,10 +63,32 @@ const Beam& beam()
         FixedRegion clamp;
         clamp.max = Vec3(0.1, 1e9, 1e9);
         spec.fixed.push_back(clamp);
-        const TetMesh mesh = make_box(Vec3(0.0, 6.0, -2.0), Vec3(19.0, 10.0, 2.0), {75, 15, 15});
+        return spec;
+}
+
+TetMesh beam_mesh() { return make_box(Vec3(0.0, 6.0, -2.0), Vec3(19.0, 10.0, 2.0), {75, 15, 15}); }
+
+constexpr double DT = 0.04;
+const Vec3 GRAVITY(0.0, -9.0, 0.0);
+
+/// The beam's system at its first implicit Euler step, with double values (`body`) and with
+/// single ones assembled by the same element loop (`single`).
+struct Beam {
+    std::unique_ptr<Body> body;
+    std::unique_ptr<Body> single;
+    VecX rhs;
+};
+
+const Beam& beam()
+{
+    static const Beam b = [] {
+        const TetMesh mesh = beam_mesh();
+        const Index parts = default_num_parts(mesh.num_tets(), 4);
         Beam out;
-        out.body = std::make_unique<Body>(mesh, spec, default_num_parts(mesh.num_tets(), 4));
-        out.rhs = bench::implicit_euler_system(*out.body, 0.04, Vec3(0.0, -9.0, 0.0));
+        out.body = std::make_unique<Body>(mesh, beam_spec(), parts);
+        out.single = std::make_unique<Body>(mesh, beam_spec(), parts, MatrixPrecision::SINGLE);
+        out.rhs = bench::implicit_euler_system(*out.body, DT, GRAVITY);
+        bench::implicit_euler_system(*out.single, DT, GRAVITY);
         return out;
     }();
     return b;
@@ -79,7 +102,7 @@ class FloatUpper {
 public:
     explicit FloatUpper(const BsrMatrix& a) : m_a(a), m_scene({&a})
     {
-        m_values.assign(a.values().begin(), a.values().end());
+        m_values.assign(a.values().begin(), a.values().end()); // rounded to float
         // Per row, the blocks (k, source row) of earlier chunks whose column is the row (the
         // BsrMatrix keeps its own list private).
         const std::vector<Index>& chunks = a.chunk_offsets();
@@ -323,9 +346,8 @@ struct FloatPcg {
     }
 };
 
-void SpmvDouble(benchmark::State& state)
+void spmv(benchmark::State& state, const BsrMatrix& a)
 {
-    const BsrMatrix& a = beam().body->system_matrix();
     const SceneMatrix scene({&a});
     const VecX x = beam().rhs;
     VecX y(x.size());
@@ -338,23 +360,22 @@ void SpmvDouble(benchmark::State& state)
         benchmark::DoNotOptimize(sum);
     }
     state.counters["blocks"] = a.num_blocks();
-    state.SetBytesProcessed(static_cast<int64_t>(state.iterations()) * a.num_blocks() * 9 * 8);
 }
 
-void SpmvFloat(benchmark::State& state)
+void SpmvDouble(benchmark::State& state) { spmv(state, beam().body->system_matrix()); }
+void SpmvSingle(benchmark::State& state) { spmv(state, beam().single->system_matrix()); }
+
+void SpmvKernelFloat(benchmark::State& state)
 {
-    const BsrMatrix& a = beam().body->system_matrix();
-    FloatUpper f(a);
+    FloatUpper f(beam().body->system_matrix());
     const VecX x = beam().rhs;
     VecX y(x.size());
     for (auto _ : state)
         benchmark::DoNotOptimize(f.multiply_dot(x.data(), y.data()));
-    state.SetBytesProcessed(static_cast<int64_t>(state.iterations()) * a.num_blocks() * 9 * 4);
 }
 
-void Pcg10Double(benchmark::State& state)
+void pcg10(benchmark::State& state, const BsrMatrix& a)
 {
-    const BsrMatrix& a = beam().body->system_matrix();
     const SceneMatrix scene({&a});
     PcgSolver pcg;
     PcgSettings settings;
@@ -370,7 +391,10 @@ void Pcg10Double(benchmark::State& state)
     state.counters["residual"] = residual;
 }
 
-void Pcg10Float(benchmark::State& state)
+void Pcg10Double(benchmark::State& state) { pcg10(state, beam().body->system_matrix()); }
+void Pcg10Single(benchmark::State& state) { pcg10(state, beam().single->system_matrix()); }
+
+void Pcg10KernelFloat(benchmark::State& state)
 {
     const BsrMatrix& a = beam().body->system_matrix();
     FloatUpper f(a);
@@ -384,38 +408,109 @@ void Pcg10Float(benchmark::State& state)
     state.counters["residual"] = residual;
 }
 
+/// Whole implicit Euler steps of the beam (no contact), 10 Jacobi-PCG iterations each.
+void step(benchmark::State& state, MatrixPrecision precision)
+{
+    const TetMesh mesh = beam_mesh();
+    std::vector<Body> bodies;
+    bodies.emplace_back(mesh, beam_spec(), default_num_parts(mesh.num_tets(), 4), precision);
+    SceneSystem system(bodies);
+    PcgSettings settings;
+    settings.max_iterations = 10;
+    settings.tolerance = 0.0;
+    settings.preconditioner = PcgPreconditioner::JACOBI;
+    for (auto _ : state)
+        system.step(DT, GRAVITY, {}, settings);
+}
+
+void StepDouble(benchmark::State& state) { step(state, MatrixPrecision::DOUBLE); }
+void StepSingle(benchmark::State& state) { step(state, MatrixPrecision::SINGLE); }
+
 BENCHMARK(SpmvDouble)->Unit(benchmark::kMillisecond)->UseRealTime();
-BENCHMARK(SpmvFloat)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(SpmvSingle)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(SpmvKernelFloat)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(Pcg10Double)->Unit(benchmark::kMillisecond)->UseRealTime();
-BENCHMARK(Pcg10Float)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(Pcg10Single)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(Pcg10KernelFloat)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(StepDouble)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(StepSingle)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+/// The console output, and each benchmark's real time (its median when repeated).
+class RecordingReporter : public benchmark::ConsoleReporter {
+public:
+    void ReportRuns(const std::vector<Run>& runs) override
+    {
+        for (const Run& run : runs)
+            if (run.run_type == Run::RT_Aggregate ? run.aggregate_name == "median" : !m_times.count(name(run)))
+                m_times[name(run)] = run.GetAdjustedRealTime();
+        ConsoleReporter::ReportRuns(runs);
+    }
+    /// Real time of a benchmark, or 0 if it did not run.
+    double time(const std::string& benchmark) const
+    {
+        const auto it = m_times.find(benchmark);
+        return it == m_times.end() ? 0.0 : it->second;
+    }
+
+private:
+    static std::string name(const Run& run) { return run.run_name.function_name; }
+    std::map<std::string, double> m_times;
+};
+
+void print_comparison(const RecordingReporter& r)
+{
+    std::printf("\nsingle-precision values (ratios of real times; > 1: single is faster):\n");
+    for (const std::string what : {"Spmv", "Pcg10", "Step"}) {
+        const double single = r.time(what + "Single"), dbl = r.time(what + "Double"), kernel = r.time(what + "KernelFloat");
+        if (single <= 0.0)
+            continue;
+        std::printf("  %-6s single %8.3f ms: %.2f × the double path (%.3f ms)", what.c_str(), single, dbl / single, dbl);
+        if (kernel > 0.0)
+            std::printf(", %.2f × the speed-of-light kernel's float path (%.3f ms)", kernel / single, kernel);
+        std::printf("\n");
+    }
+}
+
+/// ‖a − b‖/‖b‖ over all values of two matrices of the same pattern.
+double relative_difference(const BsrMatrix& a, const BsrMatrix& b)
+{
+    double difference = 0.0, size = 0.0;
+    for (Index k = 0; k < a.num_blocks(); ++k) {
+        difference += (a.block(k) - b.block(k)).squaredNorm();
+        size += b.block(k).squaredNorm();
+    }
+    return std::sqrt(difference / size);
+}
 
 void accuracy()
 {
     const BsrMatrix& a = beam().body->system_matrix();
+    const BsrMatrix& single = beam().single->system_matrix();
+    const BsrMatrix rounded = a.with_precision(MatrixPrecision::SINGLE);
     const VecX& b = beam().rhs;
-    FloatUpper f(a);
+    std::printf("assembled in single precision against the double matrix: %.3e; the double matrix rounded "
+                "to float: %.3e; the two float matrices: %.3e (relative, all values)\n",
+                relative_difference(single, a), relative_difference(rounded, a), relative_difference(single, rounded));
     VecX ax(b.size()), af(b.size());
     a.multiply(b, ax);
-    f.multiply_dot(b.data(), af.data());
-    std::printf("float-valued product against the double one: ‖A_f b − A b‖/‖A b‖ = %.3e\n",
+    single.multiply(b, af);
+    std::printf("product with the single matrix against the double one: ‖A_s b − A b‖/‖A b‖ = %.3e\n",
                 (af - ax).norm() / ax.norm());
     for (const Index iterations : {10, 100, 400, 1000, 3000}) {
-        PcgSolver pcg;
         PcgSettings settings;
         settings.max_iterations = iterations;
         settings.tolerance = 1e-14;
         settings.preconditioner = PcgPreconditioner::JACOBI;
-        VecX xd = VecX::Zero(b.size()), xf = VecX::Zero(b.size());
-        pcg.solve(a, b, xd, settings);
-        FloatPcg float_pcg;
-        const double recurrence = float_pcg.solve(f, a, b, xf, iterations, 1e-14);
+        VecX xd = VecX::Zero(b.size()), xs = VecX::Zero(b.size());
+        PcgSolver().solve(a, b, xd, settings);
+        const double own = PcgSolver().solve(single, b, xs, settings).residual;
         a.multiply(xd, ax);
         const double true_double = (b - ax).norm() / b.norm();
-        a.multiply(xf, ax);
-        const double true_float = (b - ax).norm() / b.norm();
-        std::printf("%5d iterations: true residual ‖b − Ax‖/‖b‖ (A double): double values %.3e, float values %.3e "
-                    "(float recurrence %.3e); ‖x_float − x_double‖/‖x_double‖ %.3e\n",
-                    static_cast<int>(iterations), true_double, true_float, recurrence, (xf - xd).norm() / xd.norm());
+        a.multiply(xs, ax);
+        const double true_single = (b - ax).norm() / b.norm();
+        std::printf("%5d iterations: ‖b − A x‖/‖b‖ with the double A: double values %.3e, single values %.3e "
+                    "(against their own matrix %.3e); ‖x_single − x_double‖/‖x_double‖ %.3e\n",
+                    static_cast<int>(iterations), true_double, true_single, own, (xs - xd).norm() / xd.norm());
     }
 }
 
@@ -444,7 +539,9 @@ int main(int argc, char** argv)
     }
     int count = static_cast<int>(rest.size());
     benchmark::Initialize(&count, rest.data());
-    benchmark::RunSpecifiedBenchmarks();
+    RecordingReporter reporter;
+    benchmark::RunSpecifiedBenchmarks(&reporter);
     benchmark::Shutdown();
+    print_comparison(reporter);
     return 0;
 }

@@ -3,8 +3,6 @@
 #include <corocontact/core/error.hpp>
 #include <corocontact/solver/vector_ops.hpp>
 
-#include <Eigen/LU>
-
 #include <cmath>
 
 namespace coro {
@@ -13,23 +11,18 @@ namespace {
 std::size_t at(Index i) { return static_cast<std::size_t>(i); }
 } // namespace
 
-void PcgSolver::build_preconditioner(const SceneMatrix& a, PcgPreconditioner kind)
+void PcgSolver::prepare_preconditioner(const SceneMatrix& a, const PcgSettings& settings)
 {
-    m_kind = kind;
-    m_inverse_blocks.resize(at(a.num_block_rows()));
-    if (kind == PcgPreconditioner::JACOBI)
-        m_inverse_diagonal.resize(a.num_dofs());
-    for_each_chunk(a.chunks(), [&](Index c, Index begin, Index end) {
-        Block3* blocks = m_inverse_blocks.data() + begin;
-        a.diagonal_blocks(c, blocks);
-        for (Index r = begin; r < end; ++r) {
-            Block3& d = m_inverse_blocks[at(r)];
-            if (kind == PcgPreconditioner::BLOCK_JACOBI)
-                d = d.inverse().eval();
-            else
-                m_inverse_diagonal.segment<3>(3 * r) = d.diagonal().cwiseInverse();
-        }
-    });
+    if (!m_preconditioner || settings.preconditioner != m_kind) {
+        m_preconditioner = make_preconditioner(settings.preconditioner, settings.amg);
+        m_kind = settings.preconditioner;
+    }
+    m_preconditioner->prepare(a);
+}
+
+PreconditionerTimes PcgSolver::preconditioner_times() const
+{
+    return m_preconditioner ? m_preconditioner->times() : PreconditionerTimes{};
 }
 
 double PcgSolver::sum_chunks(const std::vector<double>& chunk_dots) const
@@ -46,8 +39,16 @@ PcgSolver::Sums PcgSolver::residual_pass(const RowChunks& chunks, const double* 
     double* z = m_z.data();
     const double* p = m_p.data();
     const double* q = m_q.data();
-    const double* inv_diag = m_inverse_diagonal.data();
-    const bool block = m_kind == PcgPreconditioner::BLOCK_JACOBI;
+    Preconditioner& preconditioner = *m_preconditioner;
+    const bool local = preconditioner.is_chunk_local();
+    const auto chunk_sums = [&](Index c, std::ptrdiff_t begin, std::ptrdiff_t end) {
+        Sums sums;
+        for (std::ptrdiff_t i = begin; i < end; ++i) {
+            sums.rr += r[i] * r[i];
+            sums.rz += r[i] * z[i];
+        }
+        m_chunk_sums[at(c)] = sums;
+    };
     for_each_chunk(chunks, [&](Index c, Index row_begin, Index row_end) {
         const std::ptrdiff_t begin = 3 * static_cast<std::ptrdiff_t>(row_begin);
         const std::ptrdiff_t end = 3 * static_cast<std::ptrdiff_t>(row_end);
@@ -60,21 +61,17 @@ PcgSolver::Sums PcgSolver::residual_pass(const RowChunks& chunks, const double* 
                 r[i] -= alpha * q[i];
             }
         }
-        if (block) {
-            for (Index v = row_begin; v != row_end; ++v)
-                Eigen::Map<Vec3>(z + 3 * v) =
-                    m_inverse_blocks[at(v)] * Eigen::Map<const Vec3>(r + 3 * v);
-        } else {
-            for (std::ptrdiff_t i = begin; i < end; ++i)
-                z[i] = inv_diag[i] * r[i];
-        }
-        Sums sums;
-        for (std::ptrdiff_t i = begin; i < end; ++i) {
-            sums.rr += r[i] * r[i];
-            sums.rz += r[i] * z[i];
-        }
-        m_chunk_sums[at(c)] = sums;
+        if (!local)
+            return;
+        preconditioner.apply_rows(row_begin, row_end, r, z);
+        chunk_sums(c, begin, end);
     });
+    if (!local) {
+        preconditioner.apply(r, z);
+        for_each_chunk(chunks, [&](Index c, Index row_begin, Index row_end) {
+            chunk_sums(c, 3 * static_cast<std::ptrdiff_t>(row_begin), 3 * static_cast<std::ptrdiff_t>(row_end));
+        });
+    }
     Sums total;
     for (const Sums& sums : m_chunk_sums) {
         total.rr += sums.rr;
@@ -111,13 +108,14 @@ PcgResult PcgSolver::solve(const SceneMatrix& a, CRef<VecX> b, Eigen::Ref<VecX> 
         result.converged = true;
         return result;
     }
-    build_preconditioner(a, settings.preconditioner);
+    prepare_preconditioner(a, settings);
 
     a.multiply(x.data(), m_r.data(), nullptr);
     Sums sums = residual_pass(chunks, b.data(), 0.0, x.data()); // r = b − A x, z = M⁻¹ r
     CORO_CHECK(std::isfinite(sums.rr) && std::isfinite(sums.rz), NumericalError,
                "PCG: the initial residual is not finite (rᵀr = " << sums.rr << ", rᵀz = " << sums.rz << ")");
     double r_norm = std::sqrt(sums.rr);
+    const double initial_norm = r_norm;
     double rz = sums.rz;
     m_p = m_z;
 
@@ -140,6 +138,7 @@ PcgResult PcgSolver::solve(const SceneMatrix& a, CRef<VecX> b, Eigen::Ref<VecX> 
         xpby(m_z, sums.rz / rz, m_p);
         rz = sums.rz;
     }
+    m_preconditioner->record_solve(iteration, initial_norm > 0.0 ? r_norm / initial_norm : 0.0);
     result.iterations = iteration;
     result.residual = r_norm / b_norm;
     result.converged = r_norm <= target;
