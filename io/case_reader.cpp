@@ -6,6 +6,8 @@
 #include <corocontact/io/case_reader.hpp>
 
 #include <corocontact/core/error.hpp>
+#include <corocontact/core/tet_mesh.hpp>
+#include <corocontact/io/block_names.hpp>
 
 #include <toml++/toml.h>
 
@@ -218,17 +220,28 @@ std::string join_plain(const std::vector<std::string_view>& words)
     return text;
 }
 
-/// Letters, digits, '_', '.', '-'; not "." or "..": safe as a file name and in a CSV field.
+/// Longest simulation or body name: with the suffixes the output adds (`_surface`,
+/// `_<step>.vtm`, `.summary.json`, `.tmp`) a file name stays below the usual 255-byte limit.
+constexpr std::size_t MAX_NAME_LENGTH = 128;
+
+/// 1 to MAX_NAME_LENGTH letters, digits, '_', '.', '-'; not "." or "..": safe as a file name
+/// and in a CSV field.
 bool is_valid_name(const std::string& name)
 {
-    if (name.empty() || name == "." || name == "..")
+    if (name.empty() || name.size() > MAX_NAME_LENGTH || name == "." || name == "..")
         return false;
     return std::all_of(name.begin(), name.end(), [](char c) {
         return std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '.' || c == '-';
     });
 }
 
-constexpr const char* NAME_RULE = "a non-empty name of letters, digits, '_', '.' and '-'";
+constexpr const char* NAME_RULE = "a name of 1 to 128 letters, digits, '_', '.' and '-'";
+
+/// " (300 characters)" for a name that is too long, else "".
+std::string length_note(const std::string& name)
+{
+    return name.size() > MAX_NAME_LENGTH ? " (" + std::to_string(name.size()) + " characters)" : "";
+}
 
 /// Allowed interval of a number, with its text for messages.
 struct Range {
@@ -258,6 +271,10 @@ struct Range {
 const Range ANY{};
 const Range POSITIVE{0.0, std::numeric_limits<double>::infinity(), true, false};
 const Range NON_NEGATIVE{0.0, std::numeric_limits<double>::infinity(), false, false};
+/// A relative tolerance: 1 or more is met before the first iteration.
+const Range RELATIVE_TOLERANCE{0.0, 1.0, true, true};
+/// The PCG tolerance: as RELATIVE_TOLERANCE, and 0 asks for max_iterations in every solve.
+const Range PCG_TOLERANCE{0.0, 1.0, false, true};
 
 // ---------------------------------------------------------------------------------------------
 // Reading one table.
@@ -360,11 +377,12 @@ public:
         return node ? as_number(*node, full(key), range) : fallback;
     }
 
-    /// An integer inside [min, 2^31-1]; `fallback` if absent.
-    Index integer(std::string_view key, Index fallback, Index min) const
+    /// An integer inside [min, max]; `fallback` if absent.
+    Index integer(std::string_view key, Index fallback, Index min,
+                  Index max = std::numeric_limits<Index>::max()) const
     {
         const toml::node* node = find(key);
-        return node ? as_index(*node, full(key), min) : fallback;
+        return node ? as_index(*node, full(key), min, max) : fallback;
     }
 
     bool boolean(std::string_view key, bool fallback) const
@@ -545,9 +563,9 @@ private:
         return value;
     }
 
-    Index as_index(const toml::node& node, const std::string& name, Index min) const
+    Index as_index(const toml::node& node, const std::string& name, Index min,
+                   Index max = std::numeric_limits<Index>::max()) const
     {
-        constexpr auto MAX = std::numeric_limits<Index>::max();
         if (!node.is_integer())
             CORO_CASE_ERROR(m_ctx, node.source(), name,
                             "expected an integer >= " << min << ", found " << describe(node)
@@ -558,9 +576,9 @@ private:
         if (value < min)
             CORO_CASE_ERROR(m_ctx, node.source(), name,
                             "expected an integer >= " << min << ", found " << describe(node));
-        if (value > MAX)
+        if (value > max)
             CORO_CASE_ERROR(m_ctx, node.source(), name,
-                            "expected an integer >= " << min << " and <= " << MAX << ", found "
+                            "expected an integer >= " << min << " and <= " << max << ", found "
                                                       << describe(node));
         return static_cast<Index>(value);
     }
@@ -585,7 +603,7 @@ void read_simulation(const TableReader& root, const fs::path& file, CaseSpec& sp
         if (!is_valid_name(*name))
             CORO_CASE_ERROR(t.ctx(), t.find("name")->source(), "simulation.name",
                             "expected " << NAME_RULE << " (it becomes a file name), found "
-                                        << describe(*t.find("name")));
+                                        << describe(*t.find("name")) << length_note(*name));
         s.name = *name;
     } else {
         s.name = file.stem().string();
@@ -623,7 +641,7 @@ void read_solver(const TableReader& root, SolverSettings& s)
     const TableReader t(root.ctx(), *table, "solver");
     t.reject_unknown_keys(SOLVER_SCHEMA);
     s.max_iterations = t.integer("max_iterations", s.max_iterations, 1);
-    s.tolerance = t.number("tolerance", s.tolerance, NON_NEGATIVE);
+    s.tolerance = t.number("tolerance", s.tolerance, PCG_TOLERANCE);
     s.preconditioner = t.choice<PcgPreconditioner>("preconditioner", s.preconditioner,
                                                    {{"jacobi", PcgPreconditioner::JACOBI},
                                                     {"block_jacobi", PcgPreconditioner::BLOCK_JACOBI},
@@ -631,9 +649,10 @@ void read_solver(const TableReader& root, SolverSettings& s)
     s.matrix_precision = t.choice<MatrixPrecision>(
         "matrix_precision", s.matrix_precision,
         {{"double", MatrixPrecision::DOUBLE}, {"single", MatrixPrecision::SINGLE}});
-    s.static_tolerance = t.number("static_tolerance", s.static_tolerance, POSITIVE);
+    s.static_tolerance = t.number("static_tolerance", s.static_tolerance, RELATIVE_TOLERANCE);
     s.static_max_iterations = t.integer("static_max_iterations", s.static_max_iterations, 1);
-    s.parts_per_thread = t.integer("parts_per_thread", s.parts_per_thread, 1);
+    // Times the core count, it must still fit an Index.
+    s.parts_per_thread = t.integer("parts_per_thread", s.parts_per_thread, 1, 100000);
 }
 
 void read_contact(const TableReader& root, ContactSettings& s)
@@ -666,6 +685,31 @@ void check_box(const TableReader& t, const Vec3& min, const Vec3& max, bool stri
                                        << d << "] = " << format_number(max[d]) << " and min[" << d
                                        << "] = " << format_number(min[d]));
     }
+}
+
+/// A position given in the case (a corner, a centre, a translation, a plane's point) must be
+/// as small as validate_and_orient demands of mesh nodes: beyond, volumes overflow double.
+void check_coordinates(const TableReader& t, std::string_view key, const Vec3& v)
+{
+    if (!t.find(key) || v.cwiseAbs().maxCoeff() <= MAX_COORDINATE)
+        return;
+    CORO_CASE_ERROR(t.ctx(), t.find(key)->source(), t.full(key),
+                    "expected coordinates of magnitude at most " << format_number(MAX_COORDINATE) << ", found "
+                                                                  << format_vec(v));
+}
+
+/// A generated mesh's tet and node counts (exact in double up to 2^53) must fit the 32-bit
+/// Index that numbers them; the memory they need is checked when the scene is loaded.
+void check_generated_size(const TableReader& t, std::string_view key, const std::string& value, double tets,
+                          double nodes)
+{
+    constexpr double MAX = std::numeric_limits<Index>::max();
+    if (tets <= MAX && nodes <= MAX)
+        return;
+    CORO_CASE_ERROR(t.ctx(), t.find(key)->source(), t.full(key),
+                    value << " makes " << format_number(tets) << " tets and " << format_number(nodes)
+                          << " nodes, expected at most " << format_number(MAX)
+                          << " of each (they are numbered by 32-bit integers)");
 }
 
 constexpr std::string_view NESTED_HINT =
@@ -712,7 +756,8 @@ BodySpec read_body(const TableReader& t, Index k)
     if (const auto name = t.string("name")) {
         if (!is_valid_name(*name))
             CORO_CASE_ERROR(t.ctx(), t.find("name")->source(), t.full("name"),
-                            "expected " << NAME_RULE << ", found " << describe(*t.find("name")));
+                            "expected " << NAME_RULE << ", found " << describe(*t.find("name"))
+                                        << length_note(*name));
         body.name = *name;
     } else {
         body.name = "body" + std::to_string(k);
@@ -742,18 +787,29 @@ BodySpec read_body(const TableReader& t, Index k)
         reject_keys_of(t, SPHERE_KEYS, "shape = \"sphere\"", "has shape = \"box\"");
         body.box_min = t.vec3("min", body.box_min);
         body.box_max = t.vec3("max", body.box_max);
+        check_coordinates(t, "min", body.box_min);
+        check_coordinates(t, "max", body.box_max);
         check_box(t, body.box_min, body.box_max, true);
         body.cells = t.index3("cells", body.cells, 1);
+        const auto& c = body.cells;
+        check_generated_size(t, "cells", "[" + std::to_string(c[0]) + ", " + std::to_string(c[1]) + ", " +
+                                             std::to_string(c[2]) + "]",
+                             6.0 * c[0] * c[1] * c[2], (c[0] + 1.0) * (c[1] + 1.0) * (c[2] + 1.0));
     } else if (body.shape == BodyShape::SPHERE) {
         reject_keys_of(t, BOX_KEYS, "shape = \"box\"", "has shape = \"sphere\"");
         body.center = t.vec3("center", body.center);
-        body.radius = t.number("radius", body.radius, POSITIVE);
+        check_coordinates(t, "center", body.center);
+        body.radius = t.number("radius", body.radius, Range{0.0, MAX_COORDINATE, true, false});
         body.resolution = t.integer("resolution", body.resolution, 2);
+        const double r = body.resolution;
+        check_generated_size(t, "resolution", std::to_string(body.resolution), 6.0 * r * r * r,
+                             (r + 1.0) * (r + 1.0) * (r + 1.0));
     }
     body.surface = t.file_path("surface");
 
     BodyTransform& x = body.transform;
     x.translate = t.vec3("translate", x.translate);
+    check_coordinates(t, "translate", x.translate);
     x.rotate_axis = t.vec3("rotate_axis", x.rotate_axis);
     x.rotate_degrees = t.number("rotate_degrees", x.rotate_degrees);
     x.scale = t.number("scale", x.scale, POSITIVE);
@@ -789,6 +845,7 @@ ObstacleSpec read_obstacle(const TableReader& t)
             CORO_CASE_ERROR(t.ctx(), t.key_region("mesh"), t.full("mesh"),
                             "'mesh' is a key of type = \"mesh\", but this obstacle is a plane");
         obstacle.point = t.vec3("point", obstacle.point);
+        check_coordinates(t, "point", obstacle.point);
         const Vec3 normal = t.vec3("normal", obstacle.normal);
         if (!(normal.stableNorm() > 0.0))
             CORO_CASE_ERROR(t.ctx(), t.find("normal")->source(), t.full("normal"),
@@ -806,6 +863,38 @@ ObstacleSpec read_obstacle(const TableReader& t)
         obstacle.mesh = t.file_path("mesh");
     }
     return obstacle;
+}
+
+/// A body named like another output block of a frame (an embedded surface's, an obstacle's)
+/// would make two blocks of one name: the frame could not be written.
+void reject_block_name_clashes(const Context& ctx, const std::vector<TableReader>& bodies, const CaseSpec& spec)
+{
+    std::map<std::string, std::string> taken; // block name -> what writes it
+    for (std::size_t k = 0; k < spec.bodies.size(); ++k)
+        if (!spec.bodies[k].surface.empty())
+            taken[surface_block_name(spec.bodies[k].name)] =
+                "the embedded surface of body '" + spec.bodies[k].name + "' (" +
+                ctx.where(bodies[k].key_region("surface")) + ")";
+    Index meshes = 0, planes = 0;
+    for (const ObstacleSpec& obstacle : spec.obstacles) {
+        const bool mesh = obstacle.type == ObstacleType::MESH;
+        Index& k = mesh ? meshes : planes;
+        taken[mesh ? obstacle_block_name(k) : plane_block_name(k)] = (mesh ? "mesh obstacle " : "plane obstacle ") +
+                                                                     std::to_string(k) + " ([[obstacle]] at " +
+                                                                     obstacle.location + ")";
+        ++k;
+    }
+    for (std::size_t k = 0; k < spec.bodies.size(); ++k) {
+        const auto it = taken.find(spec.bodies[k].name);
+        if (it == taken.end())
+            continue;
+        const TableReader& t = bodies[k];
+        const toml::node* name = t.find("name");
+        CORO_CASE_ERROR(ctx, name ? name->source() : t.table().source(), t.full("name"),
+                        "expected a name that no other block of the output has, found \""
+                            << it->first << "\"" << (name ? "" : " (the default name)")
+                            << ", the block name of " << it->second << "; rename the body");
+    }
 }
 
 } // namespace
@@ -851,6 +940,7 @@ CaseSpec parse_case(const std::string& text, const fs::path& file)
     }
     for (const TableReader& t : root.table_array("obstacle"))
         spec.obstacles.push_back(read_obstacle(t));
+    reject_block_name_clashes(ctx, bodies, spec);
     return spec;
 }
 

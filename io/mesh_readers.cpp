@@ -5,19 +5,16 @@
 #include "detail/number_tokens.hpp"
 #include "detail/text_input.hpp"
 
+#include <corocontact/core/atomic_file.hpp>
 #include <corocontact/core/error.hpp>
 
 #include <algorithm>
 #include <array>
 #include <cctype>
-#include <cerrno>
 #include <charconv>
 #include <cmath>
 #include <cstdint>
-#include <cstdio>
-#include <cstring>
 #include <limits>
-#include <memory>
 #include <sstream>
 #include <string>
 #include <string_view>
@@ -262,7 +259,7 @@ void read_elements_v22(LineCursor& cursor, MshBuilder& builder)
                                   << " values");
         for (std::uint64_t t = 0; t < n_tags; ++t)
             tokens.next("element tag");
-        builder.add_tet(at(cursor), tag, read_tet_nodes(tokens, cursor));
+        builder.add_tet(at(cursor), cursor.line(), tag, read_tet_nodes(tokens, cursor));
     }
     expect_marker(cursor, "$EndElements",
                   "the " + std::to_string(count) + " elements declared at line " +
@@ -313,7 +310,7 @@ void read_elements_v41(LineCursor& cursor, MshBuilder& builder)
                 continue;
             Tokens tokens(line, cursor);
             const std::uint64_t tag = tokens.next_count("element tag");
-            builder.add_tet(at(cursor), tag, read_tet_nodes(tokens, cursor));
+            builder.add_tet(at(cursor), cursor.line(), tag, read_tet_nodes(tokens, cursor));
         }
         n_read += in_block;
     }
@@ -400,7 +397,8 @@ TetMesh read_msh(const std::filesystem::path& path)
             skip_section(cursor, line);
         }
     }
-    return builder.finish();
+    const std::string name = path.string();
+    return builder.finish([&](long at_line) { return name + ":" + std::to_string(at_line); });
 }
 
 TetMesh read_tet_mesh(const std::filesystem::path& path)
@@ -464,15 +462,7 @@ void write_msh22(const std::filesystem::path& path, const TetMesh& mesh)
     }
     out += "$EndElements\n";
 
-    std::unique_ptr<std::FILE, int (*)(std::FILE*)> file(std::fopen(path.c_str(), "wb"),
-                                                         &std::fclose);
-    CORO_CHECK(file != nullptr, InputError,
-               path.string() << ": cannot open for writing: " << std::strerror(errno));
-    const std::size_t written = std::fwrite(out.data(), 1, out.size(), file.get());
-    CORO_CHECK(written == out.size(), InputError,
-               path.string() << ": write failed: " << std::strerror(errno));
-    CORO_CHECK(std::fclose(file.release()) == 0, InputError,
-               path.string() << ": write failed on close: " << std::strerror(errno));
+    write_file_atomically(path, out);
 }
 
 } // namespace coro

@@ -276,7 +276,7 @@ void read_elements_v22(ByteReader& in, MshBuilder& builder)
                                         << ": expected non-negative node tags, found " << v);
                 node = static_cast<std::uint64_t>(v);
             }
-            builder.add_tet([&] { return in.where(at); }, static_cast<std::uint64_t>(tag), nodes);
+            builder.add_tet([&] { return in.where(at); }, static_cast<long>(at), static_cast<std::uint64_t>(tag), nodes);
         }
         n_read += in_group;
     }
@@ -395,7 +395,7 @@ void read_elements_v41(ByteReader& in, MshBuilder& builder)
             std::array<std::uint64_t, 4> nodes{};
             for (auto& node : nodes)
                 node = in.raw<std::uint64_t>();
-            builder.add_tet([&] { return in.where(at); }, tag, nodes);
+            builder.add_tet([&] { return in.where(at); }, static_cast<long>(at), tag, nodes);
         }
         n_read += in_block;
     }
@@ -455,7 +455,7 @@ TetMesh read_msh_binary(const std::string& path, std::string_view data)
                                     << in_quotes(line) << ", found end of file");
         }
     }
-    return builder.finish();
+    return builder.finish([&](long at) { return in.where(static_cast<std::size_t>(at)); });
 }
 
 } // namespace coro::detail

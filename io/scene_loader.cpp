@@ -1,5 +1,9 @@
 #include <corocontact/io/scene_loader.hpp>
 
+#include "detail/embedding_check.hpp"
+#include "detail/magnitudes.hpp"
+#include "detail/memory_budget.hpp"
+
 #include <corocontact/core/error.hpp>
 #include <corocontact/core/primitives.hpp>
 #include <corocontact/io/mesh_readers.hpp>
@@ -25,6 +29,53 @@ void warn_if_open(const Tris& faces, const std::string& what, std::vector<std::s
             << " open, " << check.nonmanifold_edges << " non-manifold, " << check.misoriented_edges
             << " misoriented edges); contact tests points against it by the winding number only";
     warnings.push_back(message.str());
+}
+
+/// A box load is split over the nodes in its box; the share of a fixed node has no effect, so
+/// less force acts than the case says.
+void warn_about_loads_on_fixed_nodes(const Body& body, const BodySpec& spec, std::vector<std::string>& warnings)
+{
+    Vec3 lost = Vec3::Zero(), total = Vec3::Zero();
+    for (const BoxLoad& load : spec.loads)
+        total += load.force;
+    for (Index v = 0; v < body.num_vertices(); ++v)
+        if (body.fixed()[static_cast<std::size_t>(v)] != 0)
+            lost += body.load_forces().segment<3>(3 * v);
+    if (!(lost.stableNorm() > 1e-12 * total.stableNorm()))
+        return;
+    std::ostringstream message;
+    message << spec.location << ": body '" << spec.name << "': " << lost.stableNorm() << " of the "
+            << total.stableNorm() << " N of its [[body.load]] forces fall on fixed nodes and have no effect";
+    warnings.push_back(message.str());
+}
+
+/// Surface vertices obey the bound of mesh nodes (validate_and_orient): beyond it, contact's
+/// boxes, distances and areas overflow double.
+void check_surface_coordinates(const SurfaceMesh& surface, const std::string& what)
+{
+    for (Index v = 0; v < surface.vertices.rows(); ++v) {
+        const double largest = surface.vertices.row(v).cwiseAbs().maxCoeff();
+        CORO_CHECK(largest <= MAX_COORDINATE, InputError,
+                   what << ": vertex " << v << " has a coordinate of magnitude " << largest
+                        << ", expected at most " << MAX_COORDINATE << " (vertices counted from 0 in file order)");
+    }
+}
+
+/// A body whose every node lies behind a plane obstacle starts inside it: the penalty would
+/// throw it out with a force of its whole depth, almost surely a normal pointing the wrong way.
+void reject_bodies_behind(const CaseSpec& spec, const Scene& scene, const ObstacleSpec& plane, const Vec3& normal)
+{
+    for (std::size_t b = 0; b < scene.bodies.size(); ++b) {
+        const Positions& x = scene.bodies[b].mesh().rest_positions;
+        const Eigen::VectorXd height = (x.rowwise() - plane.point.transpose()) * normal;
+        if (height.maxCoeff() >= 0.0)
+            continue;
+        CORO_THROW(InputError, plane.location << ": plane obstacle: body '" << spec.bodies[b].name << "' ("
+                                              << spec.bodies[b].location << ") lies entirely behind the plane, "
+                                              << -height.maxCoeff() << " to " << -height.minCoeff()
+                                              << " behind it; bodies stay on the side the normal points to: check "
+                                                 "point and normal");
+    }
 }
 
 /// Static analysis solves K' u = f once per load step, and K' is singular when the fixed nodes
@@ -120,6 +171,14 @@ LoadedScene load_scene(const CaseSpec& spec, const LoadProgress& progress)
         if (progress)
             progress(stage);
     };
+    // Generated bodies first: their size is known before anything is allocated.
+    double total_tets = 0.0;
+    for (const BodySpec& body_spec : spec.bodies) {
+        const auto [tets, key] = detail::generated_tets(body_spec);
+        total_tets += tets;
+        if (tets > 0.0)
+            detail::check_memory(total_tets, body_spec.location + ": body '" + body_spec.name + "': " + key);
+    }
     LoadedScene loaded;
     for (std::size_t b = 0; b < spec.bodies.size(); ++b) {
         const BodySpec& body_spec = spec.bodies[b];
@@ -128,6 +187,13 @@ LoadedScene load_scene(const CaseSpec& spec, const LoadProgress& progress)
         report(which + ": " +
                (body_spec.shape == BodyShape::MESH ? "reading " + body_spec.mesh.filename().string() : "meshing"));
         const TetMesh mesh = load_body_mesh(body_spec, loaded.warnings);
+        if (body_spec.shape == BodyShape::MESH) {
+            total_tets += mesh.num_tets();
+            detail::check_memory(total_tets, body_spec.location + ": body '" + body_spec.name + "': mesh " +
+                                         body_spec.mesh.string() + " has " + std::to_string(mesh.num_tets()) +
+                                         " tets");
+        }
+        detail::check_magnitudes(spec, body_spec, mesh);
         report(which + ": METIS parts and element set-up, " + std::to_string(mesh.num_tets()) +
                (mesh.num_tets() == 1 ? " tet" : " tets"));
         Body body(mesh, body_spec, default_num_parts(mesh.num_tets(), spec.solver.parts_per_thread),
@@ -141,12 +207,14 @@ LoadedScene load_scene(const CaseSpec& spec, const LoadProgress& progress)
                 throw InputError(body_spec.location + ": body '" + body_spec.name + "': surface " +
                                  body_spec.surface.string() + ": " + error.what());
             }
-            warn_if_open(surface.faces,
-                         body_spec.location + ": body '" + body_spec.name + "': surface " +
-                             body_spec.surface.string(),
-                         loaded.warnings);
+            const std::string who =
+                body_spec.location + ": body '" + body_spec.name + "': surface " + body_spec.surface.string();
+            warn_if_open(surface.faces, who, loaded.warnings);
             body_spec.transform.apply(surface.vertices);
+            check_surface_coordinates(surface, who);
+            detail::reject_surface_far_outside(body.mesh(), surface, who);
             body.embed_surface(std::move(surface));
+            detail::check_embedding(body, who, loaded.warnings);
         }
         const std::vector<Index> unused = unreferenced_vertices(body.mesh());
         if (spec.simulation.analysis == Analysis::STATIC)
@@ -157,11 +225,15 @@ LoadedScene load_scene(const CaseSpec& spec, const LoadProgress& progress)
             loaded.warnings.push_back(body_spec.location + ": body '" + body_spec.name + "': " +
                                       std::to_string(unused.size()) +
                                       " nodes belong to no tet; they are held fixed");
+        warn_about_loads_on_fixed_nodes(body, body_spec, loaded.warnings);
         loaded.scene.bodies.push_back(std::move(body));
     }
     for (const ObstacleSpec& obstacle : spec.obstacles) {
         if (obstacle.type == ObstacleType::PLANE) {
-            loaded.scene.planes.push_back({obstacle.point, obstacle.normal.normalized()});
+            const Vec3 normal = obstacle.normal.normalized();
+            loaded.scene.planes.push_back({obstacle.point, normal});
+            if (spec.contact.enabled)
+                reject_bodies_behind(spec, loaded.scene, obstacle, normal);
             continue;
         }
         report("obstacle: reading " + obstacle.mesh.filename().string());
@@ -171,6 +243,7 @@ LoadedScene load_scene(const CaseSpec& spec, const LoadProgress& progress)
         } catch (const InputError& error) {
             throw InputError(obstacle.location + ": obstacle mesh " + obstacle.mesh.string() + ": " + error.what());
         }
+        check_surface_coordinates(surface, obstacle.location + ": obstacle mesh " + obstacle.mesh.string());
         const SurfaceCheck check = check_surface(surface.faces);
         CORO_CHECK(check.closed_and_oriented(), InputError,
                    obstacle.location << ": obstacle mesh " << obstacle.mesh.string()

@@ -4,9 +4,9 @@
 
 #include <corocontact/core/embedding.hpp>
 #include <corocontact/core/error.hpp>
+#include <corocontact/io/block_names.hpp>
 #include <corocontact/sim/scene_contact.hpp>
 
-#include <fstream>
 #include <iomanip>
 #include <limits>
 #include <sstream>
@@ -62,7 +62,7 @@ std::vector<FrameBlock> scene_frame(const Scene& scene)
         if (body.embedding().num_points() > 0) {
             // The embedded contact surface, where it is now, with its contact state.
             FrameBlock surface;
-            surface.name = body.name() + "_surface";
+            surface.name = surface_block_name(body.name());
             surface.points = embedded_positions(body.embedding(), as_positions(body.positions()));
             surface.tris = body.embedded_surface().faces;
             Eigen::MatrixXd s_inside = Eigen::MatrixXd::Zero(surface.points.rows(), 1), s_depth = s_inside;
@@ -78,7 +78,7 @@ std::vector<FrameBlock> scene_frame(const Scene& scene)
     }
     for (std::size_t k = 0; k < scene.obstacle_meshes.size(); ++k) {
         FrameBlock block;
-        block.name = "obstacle" + std::to_string(k);
+        block.name = obstacle_block_name(static_cast<Index>(k));
         block.points = scene.obstacle_meshes[k].vertices;
         block.tris = scene.obstacle_meshes[k].faces;
         blocks.push_back(std::move(block));
@@ -99,7 +99,7 @@ std::vector<FrameBlock> scene_frame(const Scene& scene)
         for (const PlaneObstacle& plane : scene.planes)
             extend(plane.point.transpose());
         for (std::size_t k = 0; k < scene.planes.size(); ++k)
-            blocks.push_back(detail::plane_patch(scene.planes[k], lo, hi, "plane" + std::to_string(k)));
+            blocks.push_back(detail::plane_patch(scene.planes[k], lo, hi, plane_block_name(static_cast<Index>(k))));
     }
     return blocks;
 }
@@ -141,23 +141,6 @@ std::string summary_json(const RunSummary& summary, const SummaryContext& contex
         << "  \"peak_rss_mb\": " << context.peak_rss_mb << "\n"
         << "}\n";
     return out.str();
-}
-
-void write_file_atomically(const std::filesystem::path& path, const std::string& text)
-{
-    std::filesystem::path temporary = path;
-    temporary += ".tmp";
-    {
-        std::ofstream file(temporary, std::ios::binary | std::ios::trunc);
-        CORO_CHECK(file.good(), InputError, temporary.string() << ": cannot open for writing");
-        file << text;
-        file.flush();
-        CORO_CHECK(file.good(), InputError, temporary.string() << ": write failed");
-    }
-    std::error_code error;
-    std::filesystem::rename(temporary, path, error);
-    CORO_CHECK(!error, InputError, path.string() << ": cannot rename from " << temporary.string() << ": "
-                                                 << error.message());
 }
 
 } // namespace coro

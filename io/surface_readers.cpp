@@ -2,19 +2,17 @@
 
 #include "detail/text_input.hpp"
 
+#include <corocontact/core/atomic_file.hpp>
 #include <corocontact/core/error.hpp>
 
 #include <algorithm>
 #include <array>
 #include <cctype>
-#include <cerrno>
 #include <charconv>
 #include <cmath>
 #include <cstdint>
-#include <cstdio>
 #include <cstring>
 #include <limits>
-#include <memory>
 #include <optional>
 #include <sstream>
 #include <string>
@@ -68,20 +66,6 @@ bool is_keyword(std::string_view token, std::string_view keyword)
         if (lower(token[i]) != keyword[i])
             return false;
     return true;
-}
-
-/// Writes `bytes` to `path`, replacing the file.
-void write_file(const std::filesystem::path& path, const std::string& bytes)
-{
-    std::unique_ptr<std::FILE, int (*)(std::FILE*)> file(std::fopen(path.c_str(), "wb"),
-                                                         &std::fclose);
-    CORO_CHECK(file != nullptr, InputError,
-               path.string() << ": cannot open for writing: " << std::strerror(errno));
-    const std::size_t written = std::fwrite(bytes.data(), 1, bytes.size(), file.get());
-    CORO_CHECK(written == bytes.size(), InputError,
-               path.string() << ": write failed: " << std::strerror(errno));
-    CORO_CHECK(std::fclose(file.release()) == 0, InputError,
-               path.string() << ": write failed on close: " << std::strerror(errno));
 }
 
 /// Parses a whole token as a double; false if it is not a number. Accepts a leading '+'.
@@ -900,7 +884,7 @@ void write_binary_stl(const std::filesystem::path& path, const SurfaceMesh& surf
         out += '\0';
         out += '\0'; // attribute byte count
     }
-    write_file(path, out);
+    write_file_atomically(path, out);
 }
 
 void write_ascii_stl(const std::filesystem::path& path, const SurfaceMesh& surface)
@@ -927,7 +911,7 @@ void write_ascii_stl(const std::filesystem::path& path, const SurfaceMesh& surfa
         out << "  endloop\nendfacet\n";
     }
     out << "endsolid corocontact\n";
-    write_file(path, out.str());
+    write_file_atomically(path, out.str());
 }
 
 void append_vertices(TextOut& out, const SurfaceMesh& surface, std::string_view prefix)
@@ -977,7 +961,7 @@ void write_obj(const std::filesystem::path& path, const SurfaceMesh& surface)
         }
         out << '\n';
     }
-    write_file(path, out.str());
+    write_file_atomically(path, out.str());
 }
 
 void write_off(const std::filesystem::path& path, const SurfaceMesh& surface)
@@ -1000,7 +984,7 @@ void write_off(const std::filesystem::path& path, const SurfaceMesh& surface)
         }
         out << '\n';
     }
-    write_file(path, out.str());
+    write_file_atomically(path, out.str());
 }
 
 void write_stl(const std::filesystem::path& path, const SurfaceMesh& surface, bool binary)

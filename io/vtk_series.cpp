@@ -1,5 +1,6 @@
 #include <corocontact/io/vtk_series.hpp>
 
+#include <corocontact/core/atomic_file.hpp>
 #include <corocontact/core/error.hpp>
 
 #include <vtkCellArray.h>
@@ -112,42 +113,6 @@ std::vector<std::string> block_file_stems(const std::vector<FrameBlock>& blocks)
         stems.push_back(stem);
     }
     return stems;
-}
-
-/// Removes a temporary file left by a failed write; never anything but a regular file.
-void remove_temporary(const fs::path& tmp)
-{
-    std::error_code ec;
-    if (fs::is_regular_file(fs::symlink_status(tmp, ec)))
-        fs::remove(tmp, ec);
-}
-
-/// Moves a finished temporary file into place (atomic on POSIX).
-void commit_file(const fs::path& tmp, const fs::path& target)
-{
-    std::error_code ec;
-    fs::rename(tmp, target, ec);
-    if (ec) {
-        remove_temporary(tmp);
-        CORO_THROW(InputError, target.string() << ": cannot rename " << tmp.filename().string()
-                                               << " into place (" << ec.message() << ")");
-    }
-}
-
-/// Writes `text` to `target` through a temporary file in the same directory.
-void write_text_atomically(const fs::path& target, const std::string& text)
-{
-    const fs::path tmp = fs::path(target).concat(".tmp");
-    {
-        std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-        out << text;
-        out.close();
-        if (!out) {
-            remove_temporary(tmp);
-            CORO_THROW(InputError, target.string() << ": cannot write " << tmp.filename().string());
-        }
-    }
-    commit_file(tmp, target);
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -325,7 +290,7 @@ vtkSmartPointer<vtkUnstructuredGrid> to_vtk_grid(const FrameBlock& b)
 void write_vtu(const FrameBlock& block, const fs::path& target)
 {
     const vtkSmartPointer<vtkUnstructuredGrid> grid = to_vtk_grid(block);
-    const fs::path tmp = fs::path(target).concat(".tmp");
+    const fs::path tmp = temporary_path(target);
 
     vtkNew<vtkXMLUnstructuredGridWriter> writer;
     vtkNew<ErrorCollector> errors, pipeline_errors; // the latter only repeats "failure"
@@ -346,8 +311,8 @@ void write_vtu(const FrameBlock& block, const fs::path& target)
         why << describe_vtk_error(code);
         if (!errors->messages().empty())
             why << ": " << errors->messages();
-        CORO_THROW(InputError, target.string() << ": VTK cannot write block '" << block.name
-                                               << "' (" << why.str() << ")");
+        CORO_THROW(OutputError, target.string() << ": VTK cannot write block '" << block.name
+                                                << "' (" << why.str() << ")");
     }
     commit_file(tmp, target);
 }
@@ -366,9 +331,9 @@ VtkSeriesWriter::VtkSeriesWriter(fs::path dir, std::string name)
                                << "containing a path separator)");
     std::error_code ec;
     fs::create_directories(m_dir, ec);
-    CORO_CHECK(!ec && fs::is_directory(m_dir), InputError,
-               m_dir.string() << ": cannot create the output directory"
-                              << (ec ? " (" + ec.message() + ")" : std::string()));
+    CORO_CHECK(!ec && fs::is_directory(m_dir), OutputError,
+               m_dir.string() << ": cannot create the output folder ("
+                              << (ec ? ec.message() : std::string("a file of that name is in the way")) << ")");
 }
 
 fs::path VtkSeriesWriter::pvd_path() const { return m_dir / (m_name + ".pvd"); }
@@ -378,15 +343,60 @@ void VtkSeriesWriter::write_frame(Index step, double time, const std::vector<Fra
     validate_frame(step, time, blocks);
 
     const std::string stem = frame_stem(m_name, step);
+    const std::string vtm_file = stem + ".vtm";
+    const auto same = std::find_if(m_frames.begin(), m_frames.end(),
+                                   [&](const FrameEntry& f) { return f.vtm == vtm_file; });
+    if (same != m_frames.end()) {
+        // Rewriting a listed step replaces its files one by one, each complete; on failure the
+        // object is left as it was.
+        std::vector<fs::path> written;
+        write_frame_files(stem, blocks, written);
+        const FrameEntry old = *same;
+        same->time = time;
+        try {
+            write_pvd();
+        } catch (...) {
+            *same = old;
+            throw;
+        }
+        return;
+    }
+    // A new frame: if any of its files cannot be written, none of them stays.
+    const fs::path block_dir = m_dir / stem;
+    std::error_code ec;
+    const bool new_dir = !fs::exists(block_dir, ec);
+    std::vector<fs::path> written;
+    try {
+        write_frame_files(stem, blocks, written);
+        m_frames.push_back({time, vtm_file});
+        try {
+            write_pvd();
+        } catch (...) {
+            m_frames.pop_back();
+            throw;
+        }
+    } catch (...) {
+        for (const fs::path& file : written)
+            fs::remove(file, ec);
+        if (new_dir)
+            fs::remove(block_dir, ec); // only if empty
+        throw;
+    }
+}
+
+void VtkSeriesWriter::write_frame_files(const std::string& stem, const std::vector<FrameBlock>& blocks,
+                                        std::vector<fs::path>& written) const
+{
     const fs::path block_dir = m_dir / stem;
     std::error_code ec;
     fs::create_directories(block_dir, ec);
-    CORO_CHECK(!ec && fs::is_directory(block_dir), InputError,
-               block_dir.string() << ": cannot create the frame directory"
-                                  << (ec ? " (" + ec.message() + ")" : std::string()));
+    CORO_CHECK(!ec && fs::is_directory(block_dir), OutputError,
+               block_dir.string() << ": cannot create the frame folder ("
+                                  << (ec ? ec.message() : std::string("a file of that name is in the way"))
+                                  << ")");
 
-    // The blocks first, then the .vtm that references them, then the .pvd: whatever is
-    // listed is complete.
+    // The blocks first, then the .vtm that references them (the caller writes the .pvd):
+    // whatever is listed is complete.
     const std::vector<std::string> file_stems = block_file_stems(blocks);
     std::ostringstream vtm;
     vtm << "<?xml version=\"1.0\"?>\n"
@@ -396,36 +406,15 @@ void VtkSeriesWriter::write_frame(Index step, double time, const std::vector<Fra
     for (std::size_t i = 0; i < blocks.size(); ++i) {
         const std::string file = file_stems[i] + ".vtu";
         write_vtu(blocks[i], block_dir / file);
+        written.push_back(block_dir / file);
         vtm << "    <DataSet index=\"" << std::to_string(i) << "\" name=\""
             << xml_escape(blocks[i].name) << "\" file=\"" << xml_escape(stem + "/" + file)
             << "\"/>\n";
     }
     vtm << "  </vtkMultiBlockDataSet>\n"
         << "</VTKFile>\n";
-    const std::string vtm_file = stem + ".vtm";
-    write_text_atomically(m_dir / vtm_file, vtm.str());
-
-    // Rewriting a step replaces its entry; on failure the object is left as it was.
-    const auto same = std::find_if(m_frames.begin(), m_frames.end(),
-                                   [&](const FrameEntry& f) { return f.vtm == vtm_file; });
-    if (same != m_frames.end()) {
-        const FrameEntry old = *same;
-        same->time = time;
-        try {
-            write_pvd();
-        } catch (...) {
-            *same = old;
-            throw;
-        }
-    } else {
-        m_frames.push_back({time, vtm_file});
-        try {
-            write_pvd();
-        } catch (...) {
-            m_frames.pop_back();
-            throw;
-        }
-    }
+    write_file_atomically(m_dir / (stem + ".vtm"), vtm.str(), Sync::NONE);
+    written.push_back(m_dir / (stem + ".vtm"));
 }
 
 void VtkSeriesWriter::adopt_frame(Index step, double time)
@@ -447,7 +436,9 @@ void VtkSeriesWriter::write_pvd() const
             << "\" group=\"\" part=\"0\" file=\"" << xml_escape(f.vtm) << "\"/>\n";
     pvd << "  </Collection>\n"
         << "</VTKFile>\n";
-    write_text_atomically(pvd_path(), pvd.str());
+    // The listing reaches the disk before it replaces the previous one: after a crash the .pvd
+    // is one of the two, never empty or cut (the frames' own files are new names, not synced).
+    write_file_atomically(pvd_path(), pvd.str(), Sync::FILE);
 }
 
 } // namespace coro

@@ -117,6 +117,7 @@ void detect(benchmark::State& state, DetectionMode mode, bool with_refit, bool c
     settings.contact_data = contact_data;
     std::vector<ContactSurface> surfaces = s.surfaces[0];
     double queries = 0.0, inside = 0.0, fallbacks = 0.0;
+    DetectionScratch scratch; // kept from frame to frame, as in a time loop
     int frame = 0;
     for (auto _ : state) {
         frame = (frame + 1) % FRAMES;
@@ -126,7 +127,7 @@ void detect(benchmark::State& state, DetectionMode mode, bool with_refit, bool c
             current = &surfaces;
         }
         DetectionStats stats;
-        auto points = detect_contacts(*current, settings, &stats);
+        auto points = detect_contacts(*current, settings, scratch, &stats);
         benchmark::DoNotOptimize(points.data());
         queries += stats.candidate_vertices;
         inside += stats.inside;
@@ -164,22 +165,23 @@ __attribute__((noinline)) void profile_refit(std::vector<ContactSurface>& surfac
 
 __attribute__((noinline)) std::vector<ContactPoint> profile_detect(const std::vector<ContactSurface>& surfaces,
                                                                    const DetectionSettings& settings,
-                                                                   DetectionStats& stats)
+                                                                   DetectionScratch& scratch, DetectionStats& stats)
 {
-    return detect_contacts(surfaces, settings, &stats);
+    return detect_contacts(surfaces, settings, scratch, &stats);
 }
 
 __attribute__((noinline)) ProfileTotals profile_frames(const Scene& s, const DetectionSettings& settings, int frames)
 {
     using Clock = std::chrono::steady_clock;
     std::vector<ContactSurface> surfaces = s.surfaces[0];
+    DetectionScratch scratch;
     ProfileTotals totals;
     for (int f = 0; f < frames; ++f) {
         const auto t0 = Clock::now();
         profile_refit(surfaces, s.frames[static_cast<std::size_t>((f + 1) % FRAMES)]);
         const auto t1 = Clock::now();
         DetectionStats stats;
-        const std::vector<ContactPoint> points = profile_detect(surfaces, settings, stats);
+        const std::vector<ContactPoint> points = profile_detect(surfaces, settings, scratch, stats);
         benchmark::DoNotOptimize(points.data());
         const auto t2 = Clock::now();
         totals.refit_s += std::chrono::duration<double>(t1 - t0).count();

@@ -30,6 +30,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <ctime>
 #include <map>
 #include <memory>
 #include <string>
@@ -254,10 +255,10 @@ void BM_PipelineWithoutNarrowPhase(benchmark::State& state)
             answers[{pair.other, p.x(), p.y(), p.z()}] = inside_test(
                 surfaces[static_cast<std::size_t>(pair.other)], p, DetectionMode::EXACT, {}, AxisRayTolerances{});
         }
+    CustomNarrowPhase lookup;
+    lookup.inside = [&](Index other, const Vec3& p) { return answers.at({other, p.x(), p.y(), p.z()}); };
     for (auto _ : state)
-        benchmark::DoNotOptimize(detect_contacts(
-            surfaces, [&](Index other, const Vec3& p) { return answers.at({other, p.x(), p.y(), p.z()}); },
-            nullptr));
+        benchmark::DoNotOptimize(detect_contacts(surfaces, lookup, true));
     label(state, sc, "table lookup instead of inside tests");
 }
 
@@ -279,9 +280,10 @@ void BM_AxisRayDetect(benchmark::State& state)
     const Scene& sc = scene(static_cast<Index>(state.range(0)));
     const std::vector<ContactSurface>& surfaces = sc.surfaces[0];
     DetectionStats stats;
-    detect_contacts(surfaces, DetectionSettings{}, &stats);
+    DetectionScratch scratch;
+    detect_contacts(surfaces, DetectionSettings{}, scratch, &stats);
     for (auto _ : state)
-        benchmark::DoNotOptimize(detect_contacts(surfaces, DetectionSettings{}));
+        benchmark::DoNotOptimize(detect_contacts(surfaces, DetectionSettings{}, scratch));
     state.counters["queries"] = static_cast<double>(stats.candidate_vertices);
     state.counters["inside"] = static_cast<double>(stats.inside);
     state.counters["vertex_queries/s"] = benchmark::Counter(
@@ -300,10 +302,11 @@ void BM_AxisRayFrame(benchmark::State& state)
 {
     const Scene& sc = scene(static_cast<Index>(state.range(0)));
     std::vector<ContactSurface> surfaces = sc.surfaces[0];
+    DetectionScratch scratch;
     int frame = 0;
     for (auto _ : state) {
         next_frame(sc, frame, surfaces);
-        benchmark::DoNotOptimize(detect_contacts(surfaces, DetectionSettings{}));
+        benchmark::DoNotOptimize(detect_contacts(surfaces, DetectionSettings{}, scratch));
     }
     label(state, sc, "axis-ray exact");
 }
@@ -315,10 +318,11 @@ void BM_AxisRayFrameInsideOnly(benchmark::State& state)
     std::vector<ContactSurface> surfaces = sc.surfaces[0];
     DetectionSettings settings;
     settings.contact_data = false;
+    DetectionScratch scratch;
     int frame = 0;
     for (auto _ : state) {
         next_frame(sc, frame, surfaces);
-        benchmark::DoNotOptimize(detect_contacts(surfaces, settings));
+        benchmark::DoNotOptimize(detect_contacts(surfaces, settings, scratch));
     }
     label(state, sc, "axis-ray exact, inside only");
 }
@@ -328,6 +332,7 @@ void BM_AxisRayFrameInsideOnly(benchmark::State& state)
 // loaded machine slows them alike), median wall time per frame of each part. See main().
 struct PathTimes {
     std::vector<double> refit, detect; // seconds per frame
+    std::vector<double> cpu;           // process CPU seconds per frame (refit, update, detect)
     double queries = 0.0, inside = 0.0, by_neighbour = 0.0;
     long differing = 0; // (vertex, other body) answers that differ from the exact path's, all frames
 };
@@ -346,6 +351,15 @@ double seconds(F&& f)
     const auto t0 = std::chrono::steady_clock::now();
     f();
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+/// CPU time of this process, all threads [s]: unlike wall time, it does not grow when other
+/// processes take the cores (but counts the TBB threads' waits).
+double process_cpu_seconds()
+{
+    timespec t{};
+    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t);
+    return static_cast<double>(t.tv_sec) + 1e-9 * static_cast<double>(t.tv_nsec);
 }
 
 void summary(Index resolution, int frames, std::size_t threads)
@@ -368,6 +382,7 @@ void summary(Index resolution, int frames, std::size_t threads)
                                   "embree, depth by our tree", "embree, inside only"};
     std::vector<PathTimes> t(N_PATHS);
     std::vector<std::vector<ContactSurface>> surfaces(N_PATHS, sc.surfaces[0]);
+    std::vector<DetectionScratch> scratches(N_PATHS); // each path's, kept from frame to frame as in a time loop
     detail::EmbreeSceneSet scenes(sc.surfaces[0], detail::EmbreeBuild::REFIT);
     std::vector<double> embree_update;
     const int brute_frames = std::min(frames, resolution > 16 ? 4 : 16);
@@ -379,6 +394,7 @@ void summary(Index resolution, int frames, std::size_t threads)
                 continue;
             std::vector<ContactSurface>& s = surfaces[static_cast<std::size_t>(p)];
             PathTimes& pt = t[static_cast<std::size_t>(p)];
+            const double cpu0 = process_cpu_seconds();
             pt.refit.push_back(seconds([&] { update_surfaces(s, nodes); }));
             DetectionSettings settings;
             settings.contact_data = p == EXACT || p == PAPER || p == EMBREE || p == EMBREE_TREE_DEPTH;
@@ -395,17 +411,16 @@ void summary(Index resolution, int frames, std::size_t threads)
                 }));
             } else if (p == EMBREE_TREE_DEPTH) { // Embree's inside tests, our tree's depth searches
                 embree_update.push_back(seconds([&] { scenes.update(s); }));
-                pt.detect.push_back(seconds([&] {
-                    points = detect_contacts(
-                        s,
-                        [&](Index other, const Vec3& x) {
-                            return scenes.inside_test(s[static_cast<std::size_t>(other)], other, x);
-                        },
-                        &stats, true);
-                }));
+                CustomNarrowPhase embree_inside;
+                embree_inside.inside = [&](Index other, const Vec3& x) {
+                    return scenes.inside_test(s[static_cast<std::size_t>(other)], other, x);
+                };
+                pt.detect.push_back(seconds([&] { points = detect_contacts(s, embree_inside, true, &stats); }));
             } else {
-                pt.detect.push_back(seconds([&] { points = detect_contacts(s, settings, &stats); }));
+                DetectionScratch& scratch = scratches[static_cast<std::size_t>(p)];
+                pt.detect.push_back(seconds([&] { points = detect_contacts(s, settings, scratch, &stats); }));
             }
+            pt.cpu.push_back(process_cpu_seconds() - cpu0);
             if (p == EXACT)
                 exact_points = points;
             else
@@ -420,18 +435,20 @@ void summary(Index resolution, int frames, std::size_t threads)
                 "median wall time per frame over %d frames (brute force %d) ==\n",
                 sc.tets_per_sphere, static_cast<long>(sc.surfaces[0][0].faces.rows()), threads, frames,
                 brute_frames);
-    std::printf("%-26s %10s %10s %10s %12s %10s %10s %10s %10s\n", "path", "refit ms", "update ms", "detect ms",
-                "frame ms", "queries", "Mqueries/s", "shared", "differ");
-    std::vector<double> frame(N_PATHS);
+    std::printf("%-26s %10s %10s %10s %12s %10s %10s %10s %10s %10s\n", "path", "refit ms", "update ms", "detect ms",
+                "frame ms", "queries", "Mqueries/s", "shared", "differ", "cpu ms");
+    std::vector<double> frame(N_PATHS), frame_cpu(N_PATHS);
     for (int p = 0; p < N_PATHS; ++p) {
         const PathTimes& pt = t[static_cast<std::size_t>(p)];
         const bool embree = p == EMBREE || p == EMBREE_TREE_DEPTH || p == EMBREE_INSIDE;
         const double r = median(pt.refit), d = median(pt.detect), u = embree ? update : 0.0;
         frame[static_cast<std::size_t>(p)] = r + u + d;
+        frame_cpu[static_cast<std::size_t>(p)] = median(pt.cpu);
         const double n = pt.queries / static_cast<double>(pt.detect.size());
-        std::printf("%-26s %10.3f %10.3f %10.3f %12.3f %10.0f %10.2f %10.0f %10ld\n", names[p], 1e3 * r, 1e3 * u,
-                    1e3 * d, 1e3 * (r + u + d), n, 1e-6 * n / d, pt.by_neighbour / static_cast<double>(pt.detect.size()),
-                    pt.differing);
+        std::printf("%-26s %10.3f %10.3f %10.3f %12.3f %10.0f %10.2f %10.0f %10ld %10.3f\n", names[p], 1e3 * r,
+                    1e3 * u, 1e3 * d, 1e3 * (r + u + d), n, 1e-6 * n / d,
+                    pt.by_neighbour / static_cast<double>(pt.detect.size()), pt.differing,
+                    1e3 * frame_cpu[static_cast<std::size_t>(p)]);
     }
     // The reference point: Embree's update plus one plain first-hit ray (+x) per
     // candidate vertex, in parallel: not an inside test (no all-hit gathering, no degenerate
@@ -464,7 +481,10 @@ void summary(Index resolution, int frames, std::size_t threads)
                 "Mqueries/s = candidate vertices / detect time; shared = vertices that took a neighbour's "
                 "answer of another vertex of their group, joined by surface edges that meet no face of the other body (DetectionSettings::share_answers; 'no sharing' "
                 "tests each); differ = (vertex, other body) answers of all frames that differ from the exact path's "
-                "(inside for one, outside for the other)\n");
+                "(inside for one, outside for the other); cpu ms = CPU time of the process per frame, all threads (refit + "
+                "update + detect, median; with other processes on the cores it grows less than wall time)\n");
+    std::printf("ratio exact with depth / exact inside only per frame: %.2f (cpu %.2f)\n", frame[EXACT] / frame[EXACT_INSIDE],
+                frame_cpu[EXACT] / frame_cpu[EXACT_INSIDE]);
     std::printf("ratio exact/Embree per frame, with depth:   %.3f  (refit+detect vs refit+update+detect; Embree's "
                 "depths by its point queries)\n",
                 frame[EXACT] / frame[EMBREE]);

@@ -1,14 +1,18 @@
 // The corocontact command: run a case, detect contacts, describe a mesh or a surface.
-// Exit codes: 0 success, 2 bad input, 3 the simulation diverged.
+// Exit codes: 0 success, 2 bad input, 3 the simulation diverged, 4 the output could not be
+// written (or its folder is in use by another run).
 
 #include "progress.hpp"
 
 #include <corocontact/config.hpp>
+#include <corocontact/core/atomic_file.hpp>
 #include <corocontact/core/error.hpp>
 #include <corocontact/core/surface_mesh.hpp>
 #include <corocontact/core/surface_topology.hpp>
 #include <corocontact/io/case_reader.hpp>
 #include <corocontact/io/mesh_readers.hpp>
+#include <corocontact/io/output_lock.hpp>
+#include <corocontact/io/run_files.hpp>
 #include <corocontact/io/scene_loader.hpp>
 #include <corocontact/io/scene_output.hpp>
 #include <corocontact/io/surface_readers.hpp>
@@ -45,6 +49,7 @@ namespace {
 
 constexpr int EXIT_BAD_INPUT = 2;
 constexpr int EXIT_DIVERGED = 3;
+constexpr int EXIT_OUTPUT_FAILED = 4;
 constexpr int EXIT_SIGNAL_BASE = 128; // stopped by signal s: exit 128 + s (130 SIGINT, 143 SIGTERM)
 
 double peak_rss_mb()
@@ -119,10 +124,23 @@ int run_case(const RunOptions& options)
     coro::CaseSpec spec = coro::read_case(options.case_file);
     if (!options.out.empty())
         spec.simulation.output_dir = options.out;
-    if (options.steps > 0)
-        spec.simulation.steps = static_cast<coro::Index>(options.steps);
+    if (options.steps > 0) {
+        CORO_CHECK(spec.simulation.analysis == coro::Analysis::DYNAMIC, InputError,
+                   "--steps " << options.steps << ": " << options.case_file
+                              << " is a static analysis, whose steps are simulation.load_steps; --steps sets the "
+                                 "time steps of a dynamic one");
+        spec.simulation.steps = static_cast<coro::Index>(options.steps); // the option's range is an Index's
+    }
+    const auto checkpoint_every = static_cast<coro::Index>(options.checkpoint_every);
+    // One run per output folder, claimed before the (possibly long) load; a run refused for bad
+    // input removes its lock file again, and the folder if it made it.
+    const std::filesystem::path& out_dir = spec.simulation.output_dir;
+    const coro::OutputLock lock(out_dir, "corocontact run " + options.case_file);
+    if (!lock.stale_owner().empty())
+        std::cerr << "warning: " << lock.path().string() << ": taking over the lock of a run that ended without "
+                  << "removing it (" << lock.stale_owner() << ")\n";
 
-    // Everything is loaded and checked before the output directory is touched.
+    // Everything is loaded and checked before anything but the lock file is written there.
     coro::LoadedScene loaded = coro::load_scene(spec, [&](const std::string& stage) { progress.status(stage); });
     coro::Scene& scene = loaded.scene;
     if (coro::contact_applies(spec))
@@ -133,6 +151,9 @@ int run_case(const RunOptions& options)
         std::cerr << "warning: " << warning << "\n";
     if (const auto note = coro::contact_not_applied_note(spec))
         std::cerr << *note << "\n";
+    if (!spec.contact.enabled && !spec.obstacles.empty())
+        std::cerr << "warning: " << spec.obstacles.front().location << ": the obstacles have no effect, because "
+                  << "contact.enabled is false (set enabled = true in [contact])\n";
 
     const int threads = threads_used();
     if (!options.quiet)
@@ -143,7 +164,7 @@ int run_case(const RunOptions& options)
 
     const coro::Index last_step =
         spec.simulation.analysis == coro::Analysis::STATIC ? spec.simulation.load_steps : spec.simulation.steps;
-    const bool checkpoints = options.checkpoint_every > 0;
+    const bool checkpoints = checkpoint_every > 0;
     const std::uint64_t fingerprint =
         checkpoints || !options.restart.empty() ? coro::case_fingerprint(spec) : 0;
     coro::RunControl control;
@@ -173,12 +194,22 @@ int run_case(const RunOptions& options)
             std::cerr << "continuing from step " << state.step << " (" << options.restart << ")\n";
     }
 
-    coro::VtkSeriesWriter writer(spec.simulation.output_dir, spec.simulation.name);
+    // What an earlier run of this series left goes (a restart keeps its frames up to the
+    // checkpoint), so no old summary or frame stands beside this run's series.
+    const coro::RemovedFiles removed = coro::remove_earlier_run(out_dir, spec.simulation.name,
+                                                                options.restart.empty() ? -1 : control.resume_step,
+                                                                !options.restart.empty());
+    if (removed.files > 0 && !options.quiet)
+        std::cerr << "removed " << removed.files << " files (" << removed.frames << " frames) of an earlier run of "
+                  << spec.simulation.name << " from " << out_dir.string() << "\n";
+    coro::VtkSeriesWriter writer(out_dir, spec.simulation.name);
     for (const coro::FrameRecord& frame : frames)
         writer.adopt_frame(frame.step, frame.time);
-    const auto checkpoint_path = spec.simulation.output_dir / (spec.simulation.name + ".checkpoint");
+    if (!frames.empty())
+        writer.write_pvd();
+    const auto checkpoint_path = coro::checkpoint_path(out_dir, spec.simulation.name);
     if (checkpoints) {
-        control.checkpoint_every = static_cast<coro::Index>(options.checkpoint_every);
+        control.checkpoint_every = checkpoint_every;
         control.on_checkpoint = [&](coro::Index step, const coro::RunSummary& so_far) {
             coro::write_checkpoint(checkpoint_path, scene, {step, so_far, frames}, fingerprint);
         };
@@ -205,7 +236,7 @@ int run_case(const RunOptions& options)
     context.bodies = static_cast<coro::Index>(scene.bodies.size());
     context.tets = scene.num_tets();
     context.peak_rss_mb = peak_rss_mb();
-    const auto summary_path = spec.simulation.output_dir / (spec.simulation.name + ".summary.json");
+    const auto summary_path = coro::summary_path(out_dir, spec.simulation.name);
     coro::write_file_atomically(summary_path, coro::summary_json(summary, context));
 
     const auto& p = summary.phases;
@@ -514,6 +545,9 @@ int main(int argc, char** argv)
     } catch (const coro::InputError& error) {
         std::cerr << "error: " << error.what() << "\n";
         return EXIT_BAD_INPUT;
+    } catch (const coro::OutputError& error) {
+        std::cerr << "error: " << error.what() << "\n";
+        return EXIT_OUTPUT_FAILED;
     } catch (const coro::NumericalError& error) {
         std::cerr << "error: the simulation diverged: " << error.what() << "\n";
         return EXIT_DIVERGED;

@@ -32,6 +32,7 @@ packages=(
   petsc-dev libhypre-dev   # the AMG preconditioner (PETSc GAMG) and bench_amg's hypre
   calculix-ccx python3-matplotlib
   python3-vtk9 python3-numpy xvfb xauth libgl1-mesa-dri
+  pybind11-dev python3-pybind11 python3-dev python3-pytest
 )
 
 missing=()

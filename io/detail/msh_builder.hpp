@@ -90,12 +90,14 @@ public:
         const auto n = static_cast<std::size_t>(
             std::min<std::uint64_t>(count, m_file_bytes / MSH_MIN_ELEMENT_BYTES + 1));
         m_tets.reserve(m_tets.size() + 4 * n);
+        m_tet_tags.reserve(m_tet_tags.size() + n);
+        m_tet_locations.reserve(m_tet_locations.size() + n);
     }
 
     /// Appends a tet given by node tags, mapping them to indices; the tags must be distinct and
-    /// known.
+    /// known. `location` (line or byte offset) is kept for the message about a later duplicate.
     template <class Where>
-    void add_tet(const Where& where, std::uint64_t element_tag,
+    void add_tet(const Where& where, long location, std::uint64_t element_tag,
                  const std::array<std::uint64_t, 4>& node_tags)
     {
         CORO_CHECK(m_tets.size() / 4 < static_cast<std::size_t>(std::numeric_limits<Index>::max()),
@@ -112,19 +114,35 @@ public:
                                << tag);
             m_tets.push_back(it->second);
         }
+        m_tet_tags.push_back(element_tag);
+        m_tet_locations.push_back(location);
     }
 
     /// Number of nodes read so far.
     std::size_t num_nodes() const { return m_node_locations.size(); }
 
-    /// The mesh as read (not validated, not oriented).
-    TetMesh finish() const
+    /// The mesh as read (not validated, not oriented). A tet listed twice (the same 4 nodes in
+    /// any order) is refused here, where its element tags and locations are known;
+    /// `where_at(location)` gives "path:line" or "path: byte N" for a location of add_tet.
+    template <class WhereAt>
+    TetMesh finish(const WhereAt& where_at) const
     {
         TetMesh mesh;
         const auto n_nodes = static_cast<Eigen::Index>(m_node_locations.size());
         const auto n_tets = static_cast<Eigen::Index>(m_tets.size() / 4);
         mesh.rest_positions = Eigen::Map<const Positions>(m_positions.data(), n_nodes, 3);
         mesh.tets = Eigen::Map<const Tets>(m_tets.data(), n_tets, 4);
+        if (const auto duplicate = find_duplicate_tet(mesh.tets)) {
+            const auto first = static_cast<std::size_t>(duplicate->first);
+            const auto second = static_cast<std::size_t>(duplicate->second);
+            CORO_THROW(InputError, where_at(m_tet_locations[second])
+                                       << ": tet element " << m_tet_tags[second]
+                                       << " has the same 4 nodes as tet element " << m_tet_tags[first] << " ("
+                                       << m_unit << " " << m_tet_locations[first]
+                                       << "); expected every tet once (Gmsh's MSH 2 format repeats a volume's "
+                                          "elements for each physical group the volume belongs to: give the "
+                                          "volume one physical group, or save as MSH 4.1)");
+        }
         return mesh;
     }
 
@@ -135,6 +153,8 @@ private:
     std::vector<long> m_node_locations;  // line or byte of each node's tag
     std::unordered_map<std::uint64_t, Index> m_index_of_tag;
     std::vector<Index> m_tets; // 4 per tet
+    std::vector<std::uint64_t> m_tet_tags; // element tag of each tet
+    std::vector<long> m_tet_locations;     // line or byte of each tet
 };
 
 } // namespace coro::detail

@@ -2,7 +2,9 @@
 
 #include <corocontact/contact/winding_number.hpp>
 
-#include "orientation.hpp"
+#include "detail/axis_walk.hpp"
+#include "detail/inside_tests.hpp"
+#include "detail/orientation.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -212,7 +214,7 @@ AxisOutcome axis_test_exact(const ContactSurface& surface, const Vec3& point, in
     const Frame f = frame_of(point, axis);
     AxisHits hits(tol.tie_relative);
     const Tris& faces = surface.faces;
-    surface.tree.faces_on_axis_line(surface.vertices, point, axis, 0.0, [&](Index face) {
+    detail::faces_on_axis_line(surface.tree, surface.vertices, point, axis, 0.0, [&](Index face) {
         hits.add(classify_exact(vertex_ptr(surface, faces(face, 0)), vertex_ptr(surface, faces(face, 1)),
                                 vertex_ptr(surface, faces(face, 2)), f, tol),
                  face);
@@ -309,17 +311,17 @@ bool settle(AxisOutcome outcome, int axis, const Crossing& crossing, DetectionMo
     case AxisOutcome::INSIDE:
     case AxisOutcome::OUTSIDE:
         result.inside = outcome == AxisOutcome::INSIDE;
-        result.deciding_axis = axis;
+        result.decided_by = decided_by_axis(axis);
         result.surface_distance_bound = crossing.bound;
         result.crossing_face = crossing.face;
         return true;
     case AxisOutcome::ON_SURFACE:
         result.on_surface = true;
-        result.deciding_axis = axis;
+        result.decided_by = decided_by_axis(axis);
         return true;
     case AxisOutcome::NO_HIT:
         if (mode != DetectionMode::PAPER) {
-            result.deciding_axis = axis;
+            result.decided_by = decided_by_axis(axis);
             return true;
         }
         return false;
@@ -345,7 +347,7 @@ InsideTest inside_test_from(const ContactSurface& surface, const Vec3& point, in
     }
     if (mode != DetectionMode::PAPER) {
         result.inside = winding_number(surface.vertices, surface.faces, point) > 0.5;
-        result.deciding_axis = 3;
+        result.decided_by = DecidedBy::WINDING_NUMBER;
     }
     return result;
 }
@@ -355,7 +357,7 @@ InsideTest inside_test_from(const ContactSurface& surface, const Vec3& point, in
 void inside_tests_packet(const ContactSurface& surface, const Vec3* points, int count,
                          const AxisRayTolerances& tol, InsideTest* results)
 {
-    constexpr int N = AabbTree::AXIS_PACKET;
+    constexpr int N = detail::AXIS_PACKET;
     AxisHits hits[N];
     Frame frames[N];
     for (int q = 0; q < count; ++q) {
@@ -363,7 +365,7 @@ void inside_tests_packet(const ContactSurface& surface, const Vec3* points, int 
         frames[q] = frame_of(points[q], 0);
     }
     const Tris& faces = surface.faces;
-    surface.tree.faces_on_axis_lines(surface.vertices, points, count, 0, 0.0, [&](int q, Index face) {
+    detail::faces_on_axis_lines(surface.tree, surface.vertices, points, count, 0, 0.0, [&](int q, Index face) {
         AxisHits& h = hits[q];
         h.add(classify_exact(vertex_ptr(surface, faces(face, 0)), vertex_ptr(surface, faces(face, 1)),
                              vertex_ptr(surface, faces(face, 2)), frames[q], tol),
@@ -394,23 +396,23 @@ InsideTest inside_test(const ContactSurface& surface, const Vec3& point, Detecti
     if (!surface.closed) {
         InsideTest result;
         result.inside = winding_number(surface.vertices, surface.faces, point) > 0.5;
-        result.deciding_axis = 3;
+        result.decided_by = DecidedBy::WINDING_NUMBER;
         return result;
     }
     return inside_test_from(surface, point, 0, mode, candidate_faces, tolerances);
 }
 
-void inside_tests(const ContactSurface& surface, const Vec3* points, Index count, DetectionMode mode,
-                  const std::vector<Index>& candidate_faces, const AxisRayTolerances& tolerances,
-                  InsideTest* results)
+void detail::inside_tests(const ContactSurface& surface, const Vec3* points, Index count, DetectionMode mode,
+                          const std::vector<Index>& candidate_faces, const AxisRayTolerances& tolerances,
+                          InsideTest* results)
 {
     if (mode != DetectionMode::EXACT || !surface.closed) {
         for (Index i = 0; i < count; ++i)
             results[i] = inside_test(surface, points[i], mode, candidate_faces, tolerances);
         return;
     }
-    for (Index i = 0; i < count; i += AabbTree::AXIS_PACKET) {
-        const int n = static_cast<int>(std::min<Index>(AabbTree::AXIS_PACKET, count - i));
+    for (Index i = 0; i < count; i += detail::AXIS_PACKET) {
+        const int n = static_cast<int>(std::min<Index>(detail::AXIS_PACKET, count - i));
         inside_tests_packet(surface, points + i, n, tolerances, results + i);
     }
 }

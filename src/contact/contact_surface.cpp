@@ -3,12 +3,73 @@
 #include <corocontact/core/error.hpp>
 #include <corocontact/core/surface_mesh.hpp>
 
+#include "detail/tree_access.hpp"
+
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include <algorithm>
 #include <utility>
 
 namespace coro {
+
+SurfaceEdges surface_edges(const Tris& faces, Index num_vertices)
+{
+    // (low end, high end, face) of every face side; sorted, the sides of one edge are adjacent.
+    std::vector<std::array<Index, 3>> sides;
+    sides.reserve(3 * static_cast<std::size_t>(faces.rows()));
+    for (Index f = 0; f < faces.rows(); ++f)
+        for (int c = 0; c < 3; ++c) {
+            const Index a = faces(f, c), b = faces(f, (c + 1) % 3);
+            if (a != b)
+                sides.push_back({std::min(a, b), std::max(a, b), f});
+        }
+    std::sort(sides.begin(), sides.end());
+    std::vector<std::array<Index, 4>> edges; // low end, high end, the first and last of its faces
+    for (std::size_t i = 0, j = 0; i < sides.size(); i = j) {
+        while (j < sides.size() && sides[j][0] == sides[i][0] && sides[j][1] == sides[i][1])
+            ++j;
+        edges.push_back({sides[i][0], sides[i][1], sides[i][2], sides[j - 1][2]});
+    }
+    SurfaceEdges out;
+    const auto n = static_cast<std::size_t>(num_vertices);
+    out.start.assign(n + 1, 0);
+    for (const auto& e : edges) {
+        ++out.start[static_cast<std::size_t>(e[0]) + 1];
+        ++out.start[static_cast<std::size_t>(e[1]) + 1];
+    }
+    for (std::size_t v = 0; v < n; ++v)
+        out.start[v + 1] += out.start[v];
+    out.vertex.resize(2 * edges.size());
+    out.faces.resize(2 * edges.size());
+    std::vector<Index> next(out.start.begin(), out.start.end() - 1);
+    for (const auto& e : edges) // by (low, high): each vertex's edges come ordered by their other end
+        for (int end = 0; end < 2; ++end) {
+            const auto k = static_cast<std::size_t>(next[static_cast<std::size_t>(e[end])]++);
+            out.vertex[k] = e[1 - end];
+            out.faces[k] = {e[2], e[3]};
+        }
+    return out;
+}
+
+namespace {
+
+/// surface_edges() with the faces' tree slots filled.
+SurfaceEdges tree_edges(const Tris& faces, CRef<Positions> vertices, const AabbTree& tree)
+{
+    SurfaceEdges edges = surface_edges(faces, static_cast<Index>(vertices.rows()));
+    const std::vector<Index>& face_of_slot = detail::TreeAccess::face_of_slot(tree);
+    std::vector<Index> slot_of(face_of_slot.size());
+    for (std::size_t s = 0; s < face_of_slot.size(); ++s)
+        slot_of[static_cast<std::size_t>(face_of_slot[s])] = static_cast<Index>(s);
+    edges.tree_slots.resize(edges.faces.size());
+    for (std::size_t k = 0; k < edges.faces.size(); ++k)
+        edges.tree_slots[k] = {slot_of[static_cast<std::size_t>(edges.faces[k][0])],
+                               slot_of[static_cast<std::size_t>(edges.faces[k][1])]};
+    return edges;
+}
+
+} // namespace
 
 ContactSurface ContactSurface::from_body(std::string name, CRef<Positions> body_positions, const Tris& faces)
 {
@@ -33,6 +94,7 @@ ContactSurface ContactSurface::from_body(std::string name, CRef<Positions> body_
         surface.vertices.row(static_cast<Index>(i)) = body_positions.row(surface.body_node[i]);
     surface.closed = faces.rows() > 0 && check_surface(surface.faces).closed_and_oriented();
     surface.tree.build(surface.vertices, surface.faces);
+    surface.edges = tree_edges(surface.faces, surface.vertices, surface.tree);
     return surface;
 }
 
@@ -52,6 +114,7 @@ ContactSurface ContactSurface::from_embedding(std::string name, CRef<Positions> 
     surface.update_vertices(body_positions);
     surface.closed = faces.rows() > 0 && check_surface(surface.faces).closed_and_oriented();
     surface.tree.build(surface.vertices, surface.faces);
+    surface.edges = tree_edges(surface.faces, surface.vertices, surface.tree);
     return surface;
 }
 

@@ -2,20 +2,20 @@
 
 #include <corocontact/contact/broad_phase.hpp>
 
-#include "detection_pass.hpp"
-#include "grouped_inside_tests.hpp"
+#include "detail/detection_pass.hpp"
+#include "detail/detection_state.hpp"
+#include "detail/grouped_inside_tests.hpp"
+#include "detail/inside_tests.hpp"
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_invoke.h>
 
 #include <algorithm>
-#include <limits>
+#include <memory>
 #include <tuple>
 
 namespace coro {
-
-static_assert(sizeof(ContactPoint) == 72, "ContactPoint's documented layout: four indices, then seven doubles");
 
 namespace {
 
@@ -38,14 +38,15 @@ struct Block {
     Index begin, end;
 };
 
-/// A pass whose answers come from `inside(k, first, count, points, results)` for each block of
+/// A pass whose answers come from `inside(k, points, count, results)` for each block of
 /// candidates, the blocks as TBB tasks.
 template <class Inside>
 std::vector<ContactPoint> run_detection(const std::vector<ContactSurface>& surfaces,
                                         const std::vector<PairCandidates>& candidates, const Inside& inside,
-                                        bool contact_data, DetectionStats* stats, const NearestSearch& nearest = {})
+                                        bool contact_data, detail::DetectionState& state, DetectionStats* stats,
+                                        const CustomNarrowPhase* custom = nullptr)
 {
-    DetectionPass pass(surfaces, candidates, contact_data, nearest);
+    DetectionPass pass(surfaces, candidates, contact_data, state, custom);
     std::vector<Block> blocks;
     for (std::size_t k = 0; k < candidates.size(); ++k) {
         const auto n = static_cast<Index>(candidates[k].vertices.size());
@@ -125,28 +126,37 @@ std::vector<PairCandidates> contact_candidates(const std::vector<ContactSurface>
     return pair_candidates(surfaces, overlapping_surfaces(surfaces), mode);
 }
 
-ContactPoint make_contact_point(const std::vector<ContactSurface>& surfaces, Index body, Index vertex, Index other)
-{
-    return detail::contact_point(surfaces, body, vertex, other, std::numeric_limits<double>::infinity(), -1);
-}
+DetectionScratch::DetectionScratch() : m_state(std::make_unique<detail::DetectionState>()) {}
+DetectionScratch::~DetectionScratch() = default;
+DetectionScratch::DetectionScratch(DetectionScratch&&) noexcept = default;
+DetectionScratch& DetectionScratch::operator=(DetectionScratch&&) noexcept = default;
 
 std::vector<ContactPoint> detect_contacts(const std::vector<ContactSurface>& surfaces,
                                           const DetectionSettings& settings, DetectionStats* stats)
 {
+    DetectionScratch scratch;
+    return detect_contacts(surfaces, settings, scratch, stats);
+}
+
+std::vector<ContactPoint> detect_contacts(const std::vector<ContactSurface>& surfaces,
+                                          const DetectionSettings& settings, DetectionScratch& scratch,
+                                          DetectionStats* stats)
+{
+    detail::DetectionState& state = detail::ScratchAccess::state(scratch);
     if (!settings.share_answers || settings.mode != DetectionMode::EXACT) {
         const std::vector<PairCandidates> candidates = contact_candidates(surfaces, settings.mode);
         return run_detection(
             surfaces, candidates,
             [&](std::size_t k, const Vec3* points, Index count, InsideTest* results) {
                 const PairCandidates& pair = candidates[k];
-                inside_tests(surfaces[static_cast<std::size_t>(pair.other)], points, count, settings.mode, pair.faces,
-                             settings.tolerances, results);
+                detail::inside_tests(surfaces[static_cast<std::size_t>(pair.other)], points, count, settings.mode,
+                                     pair.faces, settings.tolerances, results);
             },
-            settings.contact_data, stats);
+            settings.contact_data, state, stats);
     }
 
     // The mid phase and the face pairs of the groups need only the broad phase: one parallel
-    // phase for both (on two threads, each phase of its own left a thread waiting).
+    // phase for both.
     const auto pairs = overlapping_surfaces(surfaces);
     std::vector<PairCandidates> candidates;
     std::vector<detail::SlotPairs> slot_pairs;
@@ -154,9 +164,9 @@ std::vector<ContactPoint> detect_contacts(const std::vector<ContactSurface>& sur
                          [&] { slot_pairs = detail::overlapping_slot_pairs(surfaces, pairs); });
     // Each pair's answers are taken in its own task, as they come; with depth searches to do,
     // its blocks are nested tasks.
-    DetectionPass pass(surfaces, candidates, settings.contact_data);
+    DetectionPass pass(surfaces, candidates, settings.contact_data, state);
     detail::grouped_inside_tests(
-        surfaces, candidates, slot_pairs, settings.tolerances, settings.contact_data,
+        surfaces, candidates, slot_pairs, settings.tolerances, settings.contact_data, state.groups,
         [&](std::size_t k, const detail::GroupedAnswers& answers) {
             const auto n = static_cast<Index>(answers.group.size());
             const Index blocks = (n + VERTEX_BLOCK - 1) / VERTEX_BLOCK;
@@ -178,17 +188,17 @@ std::vector<ContactPoint> detect_contacts(const std::vector<ContactSurface>& sur
 }
 
 std::vector<ContactPoint> detect_contacts(const std::vector<ContactSurface>& surfaces,
-                                          const std::function<InsideTest(Index other, const Vec3& point)>& inside,
-                                          DetectionStats* stats, bool contact_data, const NearestSearch& nearest)
+                                          const CustomNarrowPhase& narrow, bool contact_data, DetectionStats* stats)
 {
+    DetectionScratch scratch;
     const std::vector<PairCandidates> candidates = contact_candidates(surfaces, DetectionMode::EXACT);
     return run_detection(
         surfaces, candidates,
         [&](std::size_t k, const Vec3* points, Index count, InsideTest* results) {
             for (Index i = 0; i < count; ++i)
-                results[i] = inside(candidates[k].other, points[i]);
+                results[i] = narrow.inside(candidates[k].other, points[i]);
         },
-        contact_data, stats, nearest);
+        contact_data, detail::ScratchAccess::state(scratch), stats, &narrow);
 }
 
 } // namespace coro

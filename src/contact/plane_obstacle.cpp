@@ -4,7 +4,6 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
-#include <tuple>
 
 namespace coro {
 
@@ -26,7 +25,7 @@ std::vector<ContactPoint> detect_plane_contacts(const std::vector<ContactSurface
                     ContactPoint point;
                     point.body = b;
                     point.vertex = v;
-                    point.other = plane_other(static_cast<Index>(k));
+                    point.other = ContactTarget::plane(static_cast<Index>(k));
                     point.depth = -height;
                     point.normal = planes[k].normal;
                     out.push_back(point);
@@ -36,9 +35,7 @@ std::vector<ContactPoint> detect_plane_contacts(const std::vector<ContactSurface
     std::vector<ContactPoint> points;
     for (auto& list : per_body)
         points.insert(points.end(), list.begin(), list.end());
-    std::sort(points.begin(), points.end(), [](const ContactPoint& a, const ContactPoint& b) {
-        return std::tie(a.body, a.vertex, a.other) < std::tie(b.body, b.vertex, b.other);
-    });
+    std::sort(points.begin(), points.end(), contact_order);
     return points;
 }
 

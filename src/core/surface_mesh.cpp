@@ -8,10 +8,6 @@
 namespace coro {
 
 namespace {
-// Local faces of a positively oriented tet (x0..x3), each ordered so that its normal points
-// away from the opposite node.
-constexpr std::array<std::array<int, 3>, 4> TET_FACES{{{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}}};
-
 struct FaceRecord {
     std::array<Index, 3> sorted;
     Index tet;

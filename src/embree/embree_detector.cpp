@@ -26,23 +26,18 @@ std::vector<ContactPoint> detect_contacts_embree(const std::vector<ContactSurfac
     CORO_CHECK(static_cast<Index>(surfaces.size()) == scenes.size(), InputError,
                "Embree detection: " << surfaces.size() << " surfaces, but " << scenes.size() << " Embree scenes");
     // The depths by Embree's point queries too, so that the backend is Embree's throughout.
-    const NearestSearch nearest = [&](Index other, const Vec3& p, double distance_bound) {
+    tbb::enumerable_thread_specific<EmbreeQueryCounts> local;
+    CustomNarrowPhase narrow;
+    narrow.inside = [&](Index other, const Vec3& p) {
+        return scenes.inside_test(surfaces[static_cast<std::size_t>(other)], other, p,
+                                  counts != nullptr ? &local.local() : nullptr);
+    };
+    narrow.nearest = [&](Index other, const Vec3& p, double distance_bound) {
         return scenes.nearest(surfaces[static_cast<std::size_t>(other)], other, p, distance_bound);
     };
+    std::vector<ContactPoint> points = detect_contacts(surfaces, narrow, settings.contact_data, stats);
     if (counts == nullptr)
-        return detect_contacts(
-            surfaces,
-            [&](Index other, const Vec3& p) {
-                return scenes.inside_test(surfaces[static_cast<std::size_t>(other)], other, p);
-            },
-            stats, settings.contact_data, nearest);
-    tbb::enumerable_thread_specific<EmbreeQueryCounts> local;
-    std::vector<ContactPoint> points = detect_contacts(
-        surfaces,
-        [&](Index other, const Vec3& p) {
-            return scenes.inside_test(surfaces[static_cast<std::size_t>(other)], other, p, &local.local());
-        },
-        stats, settings.contact_data, nearest);
+        return points;
     *counts = EmbreeQueryCounts{};
     for (const EmbreeQueryCounts& c : local) {
         counts->axis_tests += c.axis_tests;
@@ -106,7 +101,7 @@ std::vector<Disagreement> cross_check(const std::vector<ContactPoint>& axis_ray,
         std::vector<Key> k;
         k.reserve(points.size());
         for (const ContactPoint& c : points)
-            k.emplace_back(c.body, c.vertex, c.other);
+            k.emplace_back(c.body, c.vertex, c.other.index);
         std::sort(k.begin(), k.end());
         k.erase(std::unique(k.begin(), k.end()), k.end());
         return k;

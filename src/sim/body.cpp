@@ -79,6 +79,46 @@ void Body::fix_vertex(Index v)
     fixed = 1;
 }
 
+void Body::set_fixed(const std::vector<char>& fixed)
+{
+    CORO_CHECK(fixed.size() == m_fixed.size(), InputError,
+               "body '" << m_name << "': " << fixed.size() << " fixed flags given, expected one per node ("
+                        << m_fixed.size() << ")");
+    m_num_fixed = 0;
+    for (std::size_t v = 0; v < fixed.size(); ++v) {
+        m_fixed[v] = fixed[v] ? 1 : 0;
+        if (m_fixed[v]) {
+            m_velocities.segment<3>(3 * static_cast<Eigen::Index>(v)).setZero();
+            ++m_num_fixed;
+        }
+    }
+}
+
+Positions Body::to_input_order(const VecX& node_values) const
+{
+    Positions rows(num_vertices(), 3);
+    for (Index v = 0; v < num_vertices(); ++v)
+        rows.row(input_node(v)) = node_values.segment<3>(3 * v).transpose();
+    return rows;
+}
+
+VecX Body::from_input_order(CRef<Positions> rows) const
+{
+    VecX node_values(3 * num_vertices());
+    for (Index v = 0; v < num_vertices(); ++v)
+        node_values.segment<3>(3 * v) = rows.row(input_node(v)).transpose();
+    return node_values;
+}
+
+Tets Body::input_tets() const
+{
+    Tets tets(m_mesh.num_tets(), 4);
+    for (Index t = 0; t < m_mesh.num_tets(); ++t)
+        for (int a = 0; a < 4; ++a)
+            tets(input_tet(t), a) = input_node(m_mesh.tets(t, a));
+    return tets;
+}
+
 void Body::embed_surface(SurfaceMesh surface)
 {
     m_embedding = embed_points(m_mesh, surface.vertices);

@@ -1,5 +1,6 @@
 #include <corocontact/sim/checkpoint.hpp>
 
+#include <corocontact/core/atomic_file.hpp>
 #include <corocontact/core/error.hpp>
 
 #include <array>
@@ -193,19 +194,7 @@ void write_checkpoint(const fs::path& path, const Scene& scene, const Checkpoint
     w.put_bytes(END, sizeof END);
     w.put(fnv1a(w.bytes().data(), w.bytes().size()));
 
-    fs::path temporary = path;
-    temporary += ".tmp";
-    {
-        std::ofstream file(temporary, std::ios::binary | std::ios::trunc);
-        CORO_CHECK(file.good(), InputError, temporary.string() << ": cannot open for writing");
-        file.write(w.bytes().data(), static_cast<std::streamsize>(w.bytes().size()));
-        file.flush();
-        CORO_CHECK(file.good(), InputError, temporary.string() << ": write failed");
-    }
-    std::error_code error;
-    fs::rename(temporary, path, error);
-    CORO_CHECK(!error, InputError, path.string() << ": cannot rename from " << temporary.string() << ": "
-                                                 << error.message());
+    write_file_atomically(path, w.bytes());
 }
 
 CheckpointState read_checkpoint(const fs::path& path, Scene& scene, std::uint64_t fingerprint,

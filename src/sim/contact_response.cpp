@@ -36,8 +36,8 @@ void ContactResponse::compute(const std::vector<Body>& bodies, const std::vector
         Index count = 0;
         if (carries_nodes(contact.body))
             count += vertex_shares(surfaces[at(contact.body)]);
-        if (carries_nodes(contact.other) && contact.face >= 0)
-            count += 3 * vertex_shares(surfaces[at(contact.other)]);
+        if (contact.other.is_surface() && carries_nodes(contact.other.index) && contact.face >= 0)
+            count += 3 * vertex_shares(surfaces[at(contact.other.index)]);
         m_share_offsets[i + 1] = m_share_offsets[i] + count;
     }
     m_shares.resize(at(m_share_offsets.back()));
@@ -74,10 +74,10 @@ void ContactResponse::compute(const std::vector<Body>& bodies, const std::vector
             };
             if (carries_nodes(contact.body))
                 add_vertex(contact.body, contact.vertex, -1.0);
-            if (carries_nodes(contact.other) && contact.face >= 0) {
-                const ContactSurface& other = surfaces[at(contact.other)];
+            if (contact.other.is_surface() && carries_nodes(contact.other.index) && contact.face >= 0) {
+                const ContactSurface& other = surfaces[at(contact.other.index)];
                 for (int c = 0; c < 3; ++c)
-                    add_vertex(contact.other, other.faces(contact.face, c), contact.barycentric[c]);
+                    add_vertex(contact.other.index, other.faces(contact.face, c), contact.barycentric[c]);
             }
             if (count == 0)
                 continue; // two obstacles

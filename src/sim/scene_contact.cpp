@@ -1,5 +1,6 @@
 #include <corocontact/sim/scene_contact.hpp>
 
+#include <corocontact/contact/broad_phase.hpp>
 #include <corocontact/core/surface_mesh.hpp>
 #include <corocontact/sim/body.hpp>
 #include <corocontact/sim/simulation.hpp>
@@ -51,6 +52,38 @@ void update_contact_surfaces(const std::vector<Body>& bodies, std::vector<Contac
     update_surfaces(surfaces, positions);
 }
 
+void contact_components(const std::vector<ContactSurface>& surfaces, Index num_bodies,
+                        std::vector<Index>& component_of_body)
+{
+    std::vector<Aabb> boxes;
+    boxes.reserve(static_cast<std::size_t>(num_bodies));
+    for (Index b = 0; b < num_bodies; ++b)
+        boxes.push_back(surfaces[static_cast<std::size_t>(b)].tree.bounds());
+    // Union-find with the lower body as root, so a component's root is its first body.
+    std::vector<Index>& root = component_of_body;
+    root.resize(static_cast<std::size_t>(num_bodies));
+    for (Index b = 0; b < num_bodies; ++b)
+        root[static_cast<std::size_t>(b)] = b;
+    const auto find = [&](Index b) {
+        while (root[static_cast<std::size_t>(b)] != b)
+            b = root[static_cast<std::size_t>(b)] = root[static_cast<std::size_t>(root[static_cast<std::size_t>(b)])];
+        return b;
+    };
+    for (const auto& [i, j] : overlapping_pairs(boxes)) {
+        const Index a = find(i), c = find(j);
+        root[static_cast<std::size_t>(std::max(a, c))] = std::min(a, c);
+    }
+    for (Index b = 0; b < num_bodies; ++b)
+        root[static_cast<std::size_t>(b)] = find(b);
+    // A root is its component's first body, so in body order it gets its number before the
+    // rest of its component asks for it.
+    Index count = 0;
+    for (Index b = 0; b < num_bodies; ++b) {
+        const Index first = root[static_cast<std::size_t>(b)];
+        root[static_cast<std::size_t>(b)] = first == b ? count++ : root[static_cast<std::size_t>(first)];
+    }
+}
+
 DetectionSettings detection_settings(const ContactSettings& contact)
 {
     DetectionSettings settings;
@@ -79,9 +112,9 @@ std::vector<NodeContact> node_contacts(const std::vector<ContactSurface>& surfac
 
 std::string contacts_csv(const std::vector<ContactSurface>& surfaces, const std::vector<ContactPoint>& points)
 {
-    // Plane obstacles (other < 0) sort after every surface and are named plane<k>.
-    const auto other_key = [&](Index other) {
-        return other >= 0 ? other : static_cast<Index>(surfaces.size()) + (-1 - other);
+    // Plane obstacles sort after every surface and are named plane<k>.
+    const auto other_key = [&](const ContactTarget& other) {
+        return other.is_surface() ? other.index : static_cast<Index>(surfaces.size()) + other.index;
     };
     const auto other_name = [&](Index key) {
         return key < static_cast<Index>(surfaces.size()) ? surfaces[static_cast<std::size_t>(key)].name

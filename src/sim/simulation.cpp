@@ -101,15 +101,15 @@ void Simulation::detect(RunSummary& summary)
         return;
     ScopedTimer timer(summary.phases.contact);
     update_contact_surfaces(m_scene.bodies, m_scene.surfaces);
-    m_scene.contacts = detect_contacts(m_scene.surfaces, detection_settings(m_spec.contact));
+    m_scene.contacts = detect_contacts(m_scene.surfaces, detection_settings(m_spec.contact), m_detection);
     if (!m_scene.planes.empty()) {
         std::vector<ContactPoint> planes = detect_plane_contacts(
             m_scene.surfaces, static_cast<Index>(m_scene.bodies.size()), m_scene.planes);
         m_scene.contacts.insert(m_scene.contacts.end(), planes.begin(), planes.end());
-        std::sort(m_scene.contacts.begin(), m_scene.contacts.end(), [](const ContactPoint& a, const ContactPoint& b) {
-            return std::tie(a.body, a.vertex, a.other) < std::tie(b.body, b.vertex, b.other);
-        });
+        std::sort(m_scene.contacts.begin(), m_scene.contacts.end(), contact_order);
     }
+    contact_components(m_scene.surfaces, static_cast<Index>(m_scene.bodies.size()), m_components);
+    m_system.matrix().set_components(m_components);
     m_response.compute(m_scene.bodies, m_scene.surfaces, m_scene.contacts, m_spec.contact, m_spec.simulation.dt,
                        m_system.matrix());
     m_scene.contact_forces = m_response.forces();
@@ -128,6 +128,15 @@ void Simulation::detect(RunSummary& summary)
         summary.embree_disagreements += static_cast<Index>(cross_check(m_scene.contacts, embree).size());
     }
 #endif
+}
+
+void Simulation::update_contact_response()
+{
+    if (!contact_applies(m_spec))
+        return;
+    m_response.compute(m_scene.bodies, m_scene.surfaces, m_scene.contacts, m_spec.contact, m_spec.simulation.dt,
+                       m_system.matrix());
+    m_scene.contact_forces = m_response.forces();
 }
 
 void Simulation::dynamic_step()

@@ -1,8 +1,8 @@
 #include <corocontact/solver/pcg.hpp>
 
 #include <corocontact/core/error.hpp>
-#include <corocontact/solver/vector_ops.hpp>
 
+#include <algorithm>
 #include <cmath>
 
 namespace coro {
@@ -25,15 +25,26 @@ PreconditionerTimes PcgSolver::preconditioner_times() const
     return m_preconditioner ? m_preconditioner->times() : PreconditionerTimes{};
 }
 
-double PcgSolver::sum_chunks(const std::vector<double>& chunk_dots) const
+void PcgSolver::sum_by_component(const SceneMatrix& a, const std::vector<double>& partials, int width, bool all)
 {
-    double sum = 0.0;
-    for (const double d : chunk_dots)
-        sum += d;
-    return sum;
+    m_totals.assign(m_components.size() * static_cast<std::size_t>(width), 0.0);
+    for (Index c = 0; c < a.chunks().num_chunks(); ++c) {
+        const auto k = at(a.chunk_component(c));
+        if (!all && !m_components[k].active)
+            continue;
+        for (int j = 0; j < width; ++j)
+            m_totals[k * static_cast<std::size_t>(width) + static_cast<std::size_t>(j)] +=
+                partials[at(c) * static_cast<std::size_t>(width) + static_cast<std::size_t>(j)];
+    }
 }
 
-PcgSolver::Sums PcgSolver::residual_pass(const RowChunks& chunks, const double* b, double alpha, double* x)
+void PcgSolver::mark_active_chunks(const SceneMatrix& a)
+{
+    for (Index c = 0; c < a.chunks().num_chunks(); ++c)
+        m_chunk_active[at(c)] = m_components[at(a.chunk_component(c))].active ? 1 : 0;
+}
+
+void PcgSolver::residual_pass(const SceneMatrix& a, const double* b, double* x)
 {
     double* r = m_r.data();
     double* z = m_z.data();
@@ -42,20 +53,24 @@ PcgSolver::Sums PcgSolver::residual_pass(const RowChunks& chunks, const double* 
     Preconditioner& preconditioner = *m_preconditioner;
     const bool local = preconditioner.is_chunk_local();
     const auto chunk_sums = [&](Index c, std::ptrdiff_t begin, std::ptrdiff_t end) {
-        Sums sums;
+        double rr = 0.0, rz = 0.0;
         for (std::ptrdiff_t i = begin; i < end; ++i) {
-            sums.rr += r[i] * r[i];
-            sums.rz += r[i] * z[i];
+            rr += r[i] * r[i];
+            rz += r[i] * z[i];
         }
-        m_chunk_sums[at(c)] = sums;
+        m_partials[2 * at(c)] = rr;
+        m_partials[2 * at(c) + 1] = rz;
     };
-    for_each_chunk(chunks, [&](Index c, Index row_begin, Index row_end) {
+    for_each_chunk(a.chunks(), [&](Index c, Index row_begin, Index row_end) {
+        if (!m_chunk_active[at(c)])
+            return;
         const std::ptrdiff_t begin = 3 * static_cast<std::ptrdiff_t>(row_begin);
         const std::ptrdiff_t end = 3 * static_cast<std::ptrdiff_t>(row_end);
         if (b) {
             for (std::ptrdiff_t i = begin; i < end; ++i)
                 r[i] = b[i] - r[i];
         } else {
+            const double alpha = m_components[at(a.chunk_component(c))].alpha;
             for (std::ptrdiff_t i = begin; i < end; ++i) {
                 x[i] += alpha * p[i];
                 r[i] -= alpha * q[i];
@@ -66,18 +81,29 @@ PcgSolver::Sums PcgSolver::residual_pass(const RowChunks& chunks, const double* 
         preconditioner.apply_rows(row_begin, row_end, r, z);
         chunk_sums(c, begin, end);
     });
-    if (!local) {
-        preconditioner.apply(r, z);
-        for_each_chunk(chunks, [&](Index c, Index row_begin, Index row_end) {
+    if (local)
+        return;
+    // Block diagonal by component: z of a stopped component is rewritten from its unchanged r
+    // and never read.
+    preconditioner.apply(r, z);
+    for_each_chunk(a.chunks(), [&](Index c, Index row_begin, Index row_end) {
+        if (m_chunk_active[at(c)])
             chunk_sums(c, 3 * static_cast<std::ptrdiff_t>(row_begin), 3 * static_cast<std::ptrdiff_t>(row_end));
-        });
-    }
-    Sums total;
-    for (const Sums& sums : m_chunk_sums) {
-        total.rr += sums.rr;
-        total.rz += sums.rz;
-    }
-    return total;
+    });
+}
+
+void PcgSolver::direction_pass(const SceneMatrix& a)
+{
+    double* p = m_p.data();
+    const double* z = m_z.data();
+    for_each_chunk(a.chunks(), [&](Index c, Index row_begin, Index row_end) {
+        if (!m_chunk_active[at(c)])
+            return;
+        const double beta = m_components[at(a.chunk_component(c))].beta;
+        for (std::ptrdiff_t i = 3 * static_cast<std::ptrdiff_t>(row_begin); i < 3 * static_cast<std::ptrdiff_t>(row_end);
+             ++i)
+            p[i] = z[i] + beta * p[i];
+    });
 }
 
 PcgResult PcgSolver::solve(const BsrMatrix& a, CRef<VecX> b, Eigen::Ref<VecX> x, const PcgSettings& settings)
@@ -94,54 +120,104 @@ PcgResult PcgSolver::solve(const SceneMatrix& a, CRef<VecX> b, Eigen::Ref<VecX> 
     m_z.resize(n);
     m_p.resize(n);
     m_q.resize(n);
-    m_chunk_dots.resize(at(chunks.num_chunks()));
-    m_chunk_sums.resize(at(chunks.num_chunks()));
+    m_partials.resize(2 * at(chunks.num_chunks()));
+    m_chunk_active.assign(at(chunks.num_chunks()), 1);
+    m_components.assign(at(a.num_components()), Component{});
 
-    PcgResult result;
+    // ‖b_k‖ per component; a component with b_k = 0 has the solution 0 and takes no iteration.
     for_each_chunk(chunks, [&](Index c, Index begin, Index end) {
-        m_chunk_dots[at(c)] = b.segment(3 * begin, 3 * (end - begin)).squaredNorm();
+        m_partials[at(c)] = b.segment(3 * begin, 3 * (end - begin)).squaredNorm();
     });
-    const double b_norm = std::sqrt(sum_chunks(m_chunk_dots));
-    CORO_CHECK(std::isfinite(b_norm), NumericalError, "PCG: the right-hand side is not finite (‖b‖ = " << b_norm << ")");
-    if (b_norm == 0.0) {
-        x.setZero();
-        result.converged = true;
-        return result;
+    sum_by_component(a, m_partials, 1, true);
+    bool any_zero = false;
+    for (std::size_t k = 0; k < m_components.size(); ++k) {
+        Component& component = m_components[k];
+        component.b_norm = std::sqrt(m_totals[k]);
+        CORO_CHECK(std::isfinite(component.b_norm), NumericalError,
+                   "PCG: the right-hand side is not finite (‖b‖ = " << component.b_norm << ")");
+        component.active = component.b_norm > 0.0;
+        any_zero = any_zero || !component.active;
+    }
+    if (any_zero) {
+        mark_active_chunks(a);
+        for_each_chunk(chunks, [&](Index c, Index begin, Index end) {
+            if (!m_chunk_active[at(c)])
+                x.segment(3 * begin, 3 * (end - begin)).setZero();
+        });
     }
     prepare_preconditioner(a, settings);
 
-    a.multiply(x.data(), m_r.data(), nullptr);
-    Sums sums = residual_pass(chunks, b.data(), 0.0, x.data()); // r = b − A x, z = M⁻¹ r
-    CORO_CHECK(std::isfinite(sums.rr) && std::isfinite(sums.rz), NumericalError,
-               "PCG: the initial residual is not finite (rᵀr = " << sums.rr << ", rᵀz = " << sums.rz << ")");
-    double r_norm = std::sqrt(sums.rr);
-    const double initial_norm = r_norm;
-    double rz = sums.rz;
+    // r = b − A x, z = M⁻¹ r, p = z.
+    mark_active_chunks(a);
+    a.multiply(x.data(), m_r.data(), nullptr, m_chunk_active.data());
+    residual_pass(a, b.data(), x.data());
+    sum_by_component(a, m_partials, 2, false);
+    for (std::size_t k = 0; k < m_components.size(); ++k) {
+        Component& component = m_components[k];
+        if (!component.active)
+            continue;
+        const double rr = m_totals[2 * k], rz = m_totals[2 * k + 1];
+        CORO_CHECK(std::isfinite(rr) && std::isfinite(rz), NumericalError,
+                   "PCG: the initial residual is not finite (rᵀr = " << rr << ", rᵀz = " << rz << ")");
+        component.r_norm = std::sqrt(rr);
+        component.initial_r_norm = component.r_norm;
+        component.rz = rz;
+        component.active = component.r_norm > settings.tolerance * component.b_norm && settings.max_iterations > 0;
+    }
     m_p = m_z;
 
-    const double target = settings.tolerance * b_norm;
-    Index iteration = 0;
-    while (r_norm > target && iteration < settings.max_iterations) {
-        a.multiply(m_p.data(), m_q.data(), m_chunk_dots.data());
-        const double pq = sum_chunks(m_chunk_dots);
-        CORO_CHECK(pq > 0.0, NumericalError,
-                   "PCG: pᵀAp = " << pq << " at iteration " << iteration
-                                  << " (the system matrix is not positive definite)");
-        const double alpha = rz / pq;
-        sums = residual_pass(chunks, nullptr, alpha, x.data()); // x += αp, r −= αq, z = M⁻¹ r
-        CORO_CHECK(std::isfinite(sums.rr) && std::isfinite(sums.rz), NumericalError,
-                   "PCG: the residual is not finite at iteration " << iteration);
-        ++iteration;
-        r_norm = std::sqrt(sums.rr);
-        if (r_norm <= target)
+    for (;;) {
+        mark_active_chunks(a);
+        if (std::none_of(m_components.begin(), m_components.end(), [](const Component& c) { return c.active; }))
             break;
-        xpby(m_z, sums.rz / rz, m_p);
-        rz = sums.rz;
+        a.multiply(m_p.data(), m_q.data(), m_partials.data(), m_chunk_active.data());
+        sum_by_component(a, m_partials, 1, false);
+        for (std::size_t k = 0; k < m_components.size(); ++k) {
+            Component& component = m_components[k];
+            if (!component.active)
+                continue;
+            const double pq = m_totals[k];
+            CORO_CHECK(pq > 0.0, NumericalError,
+                       "PCG: pᵀAp = " << pq << " at iteration " << component.iterations
+                                      << " (the system matrix is not positive definite)");
+            component.alpha = component.rz / pq;
+        }
+        residual_pass(a, nullptr, x.data()); // x += αp, r −= αq, z = M⁻¹ r
+        sum_by_component(a, m_partials, 2, false);
+        for (std::size_t k = 0; k < m_components.size(); ++k) {
+            Component& component = m_components[k];
+            if (!component.active)
+                continue;
+            const double rr = m_totals[2 * k], rz = m_totals[2 * k + 1];
+            CORO_CHECK(std::isfinite(rr) && std::isfinite(rz), NumericalError,
+                       "PCG: the residual is not finite at iteration " << component.iterations);
+            ++component.iterations;
+            component.r_norm = std::sqrt(rr);
+            if (component.r_norm <= settings.tolerance * component.b_norm ||
+                component.iterations >= settings.max_iterations) {
+                component.active = false;
+                continue;
+            }
+            component.beta = rz / component.rz;
+            component.rz = rz;
+        }
+        mark_active_chunks(a);
+        direction_pass(a);
     }
-    m_preconditioner->record_solve(iteration, initial_norm > 0.0 ? r_norm / initial_norm : 0.0);
-    result.iterations = iteration;
-    result.residual = r_norm / b_norm;
-    result.converged = r_norm <= target;
+
+    PcgResult result;
+    result.converged = true;
+    for (const Component& component : m_components) {
+        const double residual = component.b_norm > 0.0 ? component.r_norm / component.b_norm : 0.0;
+        result.iterations = std::max(result.iterations, component.iterations);
+        result.residual = std::max(result.residual, residual);
+        result.converged = result.converged && residual <= settings.tolerance;
+    }
+    // The hierarchy's quality is judged by the component that ran longest.
+    const auto slowest = std::max_element(m_components.begin(), m_components.end(),
+                                          [](const Component& l, const Component& r) { return l.iterations < r.iterations; });
+    if (slowest != m_components.end() && slowest->initial_r_norm > 0.0)
+        m_preconditioner->record_solve(slowest->iterations, slowest->r_norm / slowest->initial_r_norm);
     return result;
 }
 

@@ -30,6 +30,8 @@ SceneMatrix::SceneMatrix(std::vector<const BsrMatrix*> bodies) : m_bodies(std::m
     }
     m_chunks.group_tasks(SCENE_TASK_ROWS);
     m_coupling.finish(m_chunks);
+    m_chunk_component = m_chunk_body;
+    m_num_components = num_bodies();
 }
 
 void SceneMatrix::set_node_positions(std::vector<const VecX*> positions)
@@ -45,7 +47,24 @@ void SceneMatrix::set_node_positions(std::vector<const VecX*> positions)
     m_positions = std::move(positions);
 }
 
-void SceneMatrix::multiply(const double* x, double* y, double* chunk_dots) const
+void SceneMatrix::set_components(const std::vector<Index>& component_of_body)
+{
+    if (static_cast<Index>(component_of_body.size()) != num_bodies())
+        throw std::invalid_argument("SceneMatrix::set_components: " + std::to_string(component_of_body.size()) +
+                                    " components for " + std::to_string(num_bodies()) + " bodies");
+    Index count = 0;
+    for (const Index k : component_of_body) {
+        if (k < 0 || k > count)
+            throw std::invalid_argument("SceneMatrix::set_components: components must be numbered in the order "
+                                        "of their first body");
+        count += k == count ? 1 : 0;
+    }
+    m_num_components = count;
+    for (std::size_t c = 0; c < m_chunk_component.size(); ++c)
+        m_chunk_component[c] = component_of_body[at(m_chunk_body[c])];
+}
+
+void SceneMatrix::multiply(const double* x, double* y, double* chunk_dots, const char* active) const
 {
     // Rows, coupling and dot of a chunk whose rows are complete after its own first pass.
     const auto finish_chunk = [&](Index c, Index begin, Index end) {
@@ -58,6 +77,8 @@ void SceneMatrix::multiply(const double* x, double* y, double* chunk_dots) const
         chunk_dots[c] = sum;
     };
     for_each_chunk(m_chunks, [&](Index c, Index begin, Index end) {
+        if (active && !active[c])
+            return;
         const Index body = m_chunk_body[at(c)];
         const std::ptrdiff_t shift = 3 * static_cast<std::ptrdiff_t>(m_offsets[at(body)]);
         const BsrMatrix& matrix = *m_bodies[at(body)];
@@ -70,7 +91,7 @@ void SceneMatrix::multiply(const double* x, double* y, double* chunk_dots) const
     for_each_chunk(m_chunks, [&](Index c, Index begin, Index end) {
         const Index body = m_chunk_body[at(c)];
         const BsrMatrix& matrix = *m_bodies[at(body)];
-        if (!matrix.has_gathers())
+        if (!matrix.has_gathers() || (active && !active[c]))
             return;
         const std::ptrdiff_t shift = 3 * static_cast<std::ptrdiff_t>(m_offsets[at(body)]);
         matrix.gather_chunk(m_chunk_local[at(c)], x + shift, y + shift);

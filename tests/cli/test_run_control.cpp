@@ -3,27 +3,11 @@
 
 #include "cli_run.hpp"
 #include "mesh_fixtures.hpp"
+#include "series_check.hpp"
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
-#include <vtkCompositeDataSet.h>
-#include <vtkDataArray.h>
-#include <vtkInformation.h>
-#include <vtkMultiBlockDataSet.h>
-#include <vtkNew.h>
-#include <vtkOutputWindow.h>
-#include <vtkPointData.h>
-#include <vtkUnstructuredGrid.h>
-#include <vtkXMLMultiBlockDataReader.h>
-
-#include <fcntl.h>
-#include <signal.h>
-#include <spawn.h>
-#include <sys/wait.h>
-#include <unistd.h>
-
-#include <chrono>
 #include <csignal>
 #include <random>
 #include <regex>
@@ -31,127 +15,21 @@
 #include <thread>
 #include <vector>
 
-extern char** environ;
-
 namespace fs = std::filesystem;
 using ::testing::HasSubstr;
+using coro::test::expect_every_listed_frame_loads;
 using coro::test::listed_frames;
 using coro::test::Outcome;
 using coro::test::run;
 using coro::test::slurp;
+using coro::test::spawn;
+using coro::test::wait_for;
+using coro::test::wait_for_frames;
+using coro::test::wait_for_text;
 
 namespace {
 
 const std::string TWO_SPHERES = std::string(CORO_CASES_DIR) + "/two_spheres/two_spheres.toml";
-
-// Starts the binary with `arguments` (stdout, stderr to files in `dir`); returns its pid.
-pid_t spawn(const std::vector<std::string>& arguments, const fs::path& dir)
-{
-    posix_spawn_file_actions_t actions;
-    posix_spawn_file_actions_init(&actions);
-    posix_spawn_file_actions_addopen(&actions, 0, "/dev/null", O_RDONLY, 0);
-    const std::string out = (dir / "stdout.txt").string(), err = (dir / "stderr.txt").string();
-    posix_spawn_file_actions_addopen(&actions, 1, out.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-    posix_spawn_file_actions_addopen(&actions, 2, err.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-    std::vector<std::string> args{CORO_CLI_PATH};
-    args.insert(args.end(), arguments.begin(), arguments.end());
-    std::vector<char*> argv;
-    for (std::string& a : args)
-        argv.push_back(a.data());
-    argv.push_back(nullptr);
-    pid_t pid = -1;
-    const int error = posix_spawn(&pid, CORO_CLI_PATH, &actions, nullptr, argv.data(), environ);
-    posix_spawn_file_actions_destroy(&actions);
-    return error == 0 ? pid : -1;
-}
-
-// Waits for the child, at most `seconds` (then kills it and returns −1); the raw wait status.
-int wait_for(pid_t pid, double seconds)
-{
-    const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(seconds);
-    int status = 0;
-    while (waitpid(pid, &status, WNOHANG) == 0) {
-        if (std::chrono::steady_clock::now() > deadline) {
-            kill(pid, SIGKILL);
-            waitpid(pid, &status, 0);
-            return -1;
-        }
-        std::this_thread::sleep_for(std::chrono::milliseconds(5));
-    }
-    return status;
-}
-
-// Waits until the .pvd lists at least `frames` frames (false after `seconds`).
-bool wait_for_frames(const fs::path& pvd, std::size_t frames, double seconds)
-{
-    const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(seconds);
-    while (std::chrono::steady_clock::now() < deadline) {
-        if (listed_frames(pvd).size() >= frames)
-            return true;
-        std::this_thread::sleep_for(std::chrono::milliseconds(5));
-    }
-    return false;
-}
-
-// Collects what VTK reports instead of printing it, so a reader's complaint fails the test.
-class RecordingOutputWindow : public vtkOutputWindow {
-public:
-    static RecordingOutputWindow* New()
-    {
-        auto* window = new RecordingOutputWindow;
-        window->InitializeObjectBase();
-        return window;
-    }
-    void DisplayErrorText(const char* text) override { m_messages += text; }
-    void DisplayWarningText(const char* text) override { m_messages += text; }
-    std::string take()
-    {
-        std::string messages;
-        messages.swap(m_messages);
-        return messages;
-    }
-
-private:
-    std::string m_messages;
-};
-
-// Loads every file the .pvd lists with VTK's readers; each must hold the blocks named in
-// `bodies`, with points, cells and a finite displacement per point. Returns the count loaded.
-int expect_every_listed_frame_loads(const fs::path& pvd, const std::vector<std::string>& bodies)
-{
-    vtkNew<RecordingOutputWindow> messages;
-    vtkOutputWindow::SetInstance(messages);
-    int loaded = 0;
-    for (const std::string& frame : listed_frames(pvd)) {
-        vtkNew<vtkXMLMultiBlockDataReader> reader;
-        reader->SetFileName((pvd.parent_path() / frame).string().c_str());
-        reader->Update();
-        EXPECT_EQ(messages->take(), "") << frame << ": VTK reported errors while reading";
-        auto* blocks = vtkMultiBlockDataSet::SafeDownCast(reader->GetOutput());
-        EXPECT_NE(blocks, nullptr) << frame;
-        if (blocks == nullptr)
-            continue;
-        EXPECT_EQ(blocks->GetNumberOfBlocks(), bodies.size()) << frame;
-        for (unsigned b = 0; b < blocks->GetNumberOfBlocks() && b < bodies.size(); ++b) {
-            EXPECT_STREQ(blocks->GetMetaData(b)->Get(vtkCompositeDataSet::NAME()), bodies[b].c_str()) << frame;
-            auto* grid = vtkUnstructuredGrid::SafeDownCast(blocks->GetBlock(b));
-            EXPECT_NE(grid, nullptr) << frame << " block " << b;
-            if (grid == nullptr)
-                continue;
-            EXPECT_GT(grid->GetNumberOfPoints(), 0) << frame;
-            EXPECT_GT(grid->GetNumberOfCells(), 0) << frame;
-            vtkDataArray* u = grid->GetPointData()->GetArray("displacement");
-            EXPECT_NE(u, nullptr) << frame;
-            if (u != nullptr) {
-                EXPECT_EQ(u->GetNumberOfTuples(), grid->GetNumberOfPoints()) << frame;
-                EXPECT_TRUE(std::isfinite(u->GetRange(-1)[1])) << frame;
-            }
-        }
-        ++loaded;
-    }
-    vtkOutputWindow::SetInstance(nullptr);
-    return loaded;
-}
 
 // Every regular file under `a` (but the summary) exists under `b` with the same bytes; returns
 // how many were compared. `from_step` > 0 compares only the frames of steps ≥ from_step.
@@ -240,22 +118,29 @@ TEST(CorocontactInterrupt, KillNineAtRandomMomentsLeavesEveryListedFileLoadable)
     int frames_checked = 0;
     for (int kill_number = 0; kill_number < 8; ++kill_number) {
         // The same directory every time: leftovers of earlier kills must not hurt either.
-        const pid_t pid = spawn({"run", TWO_SPHERES, "--steps", "100000", "--threads", "1", "--quiet",
+        const pid_t pid = spawn({"run", TWO_SPHERES, "--steps", "100000", "--threads", "1",
                                  "--checkpoint-every", "7", "--out", out.string()},
                                 dir);
         ASSERT_GT(pid, 0);
-        // The first kill waits for two listed frames, so that the check below does not depend
-        // on how fast this build runs (under ASan the first frame can take longer than the
-        // random delays); every later kill finds at least one frame listed, old or new.
-        if (kill_number == 0) {
-            ASSERT_TRUE(wait_for_frames(out / "two_spheres.pvd", 2, 120.0));
+        // Each kill waits for its run's own first frames, so that the check below does not
+        // depend on how fast this build runs (under ASan the first frame can take longer than
+        // the random delays). A later run first takes over the killed run's lock and removes its
+        // series (the .pvd first, so what is listed always exists): it says so before its first
+        // frame.
+        if (kill_number > 0) {
+            ASSERT_TRUE(wait_for_text(dir / "stderr.txt", "of an earlier run of two_spheres", 120.0))
+                << slurp(dir / "stderr.txt");
         }
+        ASSERT_TRUE(wait_for_frames(out / "two_spheres.pvd", kill_number == 0 ? 2 : 1, 120.0));
         std::this_thread::sleep_for(std::chrono::milliseconds(delay_ms(random)));
         kill(pid, SIGKILL);
         const int status = wait_for(pid, 30.0);
         ASSERT_TRUE(WIFSIGNALED(status) && WTERMSIG(status) == SIGKILL) << "kill " << kill_number;
-        if (fs::exists(out / "two_spheres.pvd"))
-            frames_checked += expect_every_listed_frame_loads(out / "two_spheres.pvd", {"left", "right"});
+        if (kill_number > 0) {
+            EXPECT_THAT(slurp(dir / "stderr.txt"), HasSubstr("taking over the lock of a run that ended without "
+                                                             "removing it"));
+        }
+        frames_checked += expect_every_listed_frame_loads(out / "two_spheres.pvd", {"left", "right"});
     }
     EXPECT_GT(frames_checked, 8) << "the kills should have hit runs that had written frames";
 }

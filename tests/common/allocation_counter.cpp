@@ -16,7 +16,9 @@ void count_one()
 
 #if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
 // The sanitizer owns malloc; it calls these hooks for every allocation and release.
-#include <sanitizer/allocator_interface.h>
+// Declared here: GCC ships the sanitizer runtime but not this header (clang's does).
+extern "C" int __sanitizer_install_malloc_and_free_hooks(
+    void (*on_allocate)(const volatile void*, std::size_t), void (*on_release)(const volatile void*));
 
 namespace {
 void on_allocate(const volatile void*, std::size_t) { count_one(); }

@@ -5,6 +5,9 @@
 #include <corocontact/contact/aabb_tree.hpp>
 #include <corocontact/core/primitives.hpp>
 
+#include "detail/axis_walk.hpp"
+#include "detail/tree_access.hpp"
+
 #include <gtest/gtest.h>
 #include <tbb/task_arena.h>
 
@@ -96,7 +99,7 @@ void expect_queries_equal_brute_force(const AabbTree& tree, const SurfaceMesh& m
         const double tolerance = q % 2 == 0 ? 0.0 : 0.01;
         const int u = (axis + 1) % 3, v = (axis + 2) % 3;
         got.clear();
-        tree.faces_on_axis_line(m.vertices, p, axis, tolerance, [&](Index f) { got.push_back(f); });
+        detail::faces_on_axis_line(tree, m.vertices, p, axis, tolerance, [&](Index f) { got.push_back(f); });
         std::sort(got.begin(), got.end());
         ASSERT_TRUE(std::adjacent_find(got.begin(), got.end()) == got.end()) << "a face visited twice";
         want.clear();
@@ -113,7 +116,7 @@ void expect_queries_equal_brute_force(const AabbTree& tree, const SurfaceMesh& m
         }
         ASSERT_EQ(got, want) << "axis query " << q;
         got.clear();
-        tree.faces_on_axis_line(m.vertices, p, axis, tolerance, [&](Index f) {
+        detail::faces_on_axis_line(tree, m.vertices, p, axis, tolerance, [&](Index f) {
             got.push_back(f);
             return cutoff;
         });
@@ -124,7 +127,7 @@ void expect_queries_equal_brute_force(const AabbTree& tree, const SurfaceMesh& m
         ASSERT_TRUE(std::includes(want.begin(), want.end(), got.begin(), got.end())) << "pruned axis query " << q;
 
         // Nearest point.
-        const AabbTree::Nearest nearest = tree.nearest(m.vertices, p);
+        const NearestPoint nearest = tree.nearest(m.vertices, p);
         double best = std::numeric_limits<double>::infinity();
         for (Index f = 0; f < m.faces.rows(); ++f)
             best = std::min(best, reference_distance(p, vertex(m, f, 0), vertex(m, f, 1), vertex(m, f, 2)));
@@ -202,7 +205,7 @@ TEST(AabbTree, FacesBeyondTheFloatRangeHideNoOtherFace)
     for (Index f = 0; f < m.faces.rows(); ++f) {
         const Vec3 c = (vertex(m, f, 0) + vertex(m, f, 1) + vertex(m, f, 2)) / 3.0;
         bool met = false;
-        tree.faces_on_axis_line(m.vertices, c, 0, 0.0, [&](Index g) { met = met || g == f; });
+        detail::faces_on_axis_line(tree, m.vertices, c, 0, 0.0, [&](Index g) { met = met || g == f; });
         EXPECT_TRUE(met) << "face " << f;
     }
     Aabb bounds;
@@ -225,8 +228,9 @@ TEST(AabbTree, NodesHoldFourChildrenButOnePerLevel)
         Index levels = 0;
         for (Index capacity = 1; capacity < faces; capacity *= 4)
             ++levels;
-        EXPECT_GE(tree.num_nodes(), (faces - 1 + 2) / 3) << faces << " faces";
-        EXPECT_LE(tree.num_nodes(), (faces - 1 + 2) / 3 + levels) << faces << " faces";
+        const auto nodes = static_cast<Index>(detail::TreeAccess::nodes(tree).size());
+        EXPECT_GE(nodes, (faces - 1 + 2) / 3) << faces << " faces";
+        EXPECT_LE(nodes, (faces - 1 + 2) / 3 + levels) << faces << " faces";
     }
 }
 
@@ -281,100 +285,9 @@ TEST(AabbTree, EmptyTreeAnswersNothing)
     tree.faces_overlapping(Positions(0, 3), Aabb{Vec3::Zero(), Vec3::Ones()}, out);
     EXPECT_TRUE(out.empty());
     int visits = 0;
-    tree.faces_on_axis_line(Positions(0, 3), Vec3::Zero(), 0, 1.0, [&](Index) { ++visits; });
+    detail::faces_on_axis_line(tree, Positions(0, 3), Vec3::Zero(), 0, 1.0, [&](Index) { ++visits; });
     EXPECT_EQ(visits, 0);
     EXPECT_EQ(tree.nearest(Positions(0, 3), Vec3::Zero()).face, -1);
-}
-
-TEST(AabbTree, NearestWithHintsEqualsNearestBitForBit)
-{
-    // A sphere (faces in general position) and a structured box (many exactly tied distances).
-    std::mt19937 rng(7);
-    for (const ContactSurface& s : {surface_of(make_sphere(Vec3(0.1, -0.2, 0.05), 1.0, 8), "sphere"),
-                                    surface_of(make_box(Vec3(0, 0, 0), Vec3(1, 2, 1), {3, 6, 3}), "box")}) {
-        const Aabb box = s.tree.bounds();
-        Index previous = -1;
-        for (int q = 0; q < 400; ++q) {
-            Vec3 p = random_point(box.min.array() - 0.3, box.max.array() + 0.3, rng);
-            if (q % 4 == 0) // on the box's grid planes: ties between faces
-                p = (p * 6.0).array().round() / 6.0;
-            const AabbTree::Nearest plain = s.tree.nearest(s.vertices, p);
-            const Index random_face = std::uniform_int_distribution<Index>(0, s.tree.num_faces() - 1)(rng);
-            const double bounds[] = {std::numeric_limits<double>::infinity(), plain.distance,
-                                     plain.distance * 1.5 + 1e-3};
-            for (const double bound : bounds)
-                for (const Index hint : {Index{-1}, plain.face, random_face, previous}) {
-                    const AabbTree::Nearest hinted = s.tree.nearest(s.vertices, p, bound, hint);
-                    ASSERT_EQ(hinted.face, plain.face) << s.name << " query " << q;
-                    ASSERT_EQ(hinted.distance, plain.distance) << s.name << " query " << q;
-                    ASSERT_EQ(hinted.point, plain.point) << s.name << " query " << q;
-                    ASSERT_EQ(hinted.barycentric, plain.barycentric) << s.name << " query " << q;
-                }
-            // A bound below the true distance (a wrong hint) still gives the right answer.
-            EXPECT_EQ(s.tree.nearest(s.vertices, p, 0.5 * plain.distance, -1).face, plain.face);
-            previous = plain.face;
-        }
-    }
-}
-
-TEST(AabbTree, NearestIsTheBruteForceMinimumWithSmallestFaceOnTies)
-{
-    // The tree's answer must be, bit for bit, the minimum over all faces of (computed squared
-    // distance, face index): deep points inside a sphere (many faces nearly equally far, where
-    // box and plane bounds prune hardest), points near the surface, and points of a structured
-    // box on its grid planes (exact ties between faces).
-    // Each surface is queried without face planes, with them (update_planes), and after a refit
-    // to deformed positions (planes out of date again, then updated).
-    std::mt19937 rng(12);
-    std::vector<ContactSurface> cases;
-    for (const ContactSurface& s : {surface_of(make_sphere(Vec3(0.1, -0.2, 0.05), 1.0, 10), "sphere"),
-                                    surface_of(make_box(Vec3(0, 0, 0), Vec3(1, 2, 1), {3, 6, 3}), "box")}) {
-        cases.push_back(s);
-        cases.push_back(s);
-        cases.back().tree.update_planes(cases.back().vertices);
-        cases.push_back(s);
-        cases.back().tree.update_planes(cases.back().vertices);
-        cases.back().vertices = deform(cases.back().vertices, rng);
-        cases.back().tree.refit(cases.back().vertices);
-        cases.push_back(cases.back());
-        cases.back().tree.update_planes(cases.back().vertices);
-    }
-    for (const ContactSurface& s : cases) {
-        const Aabb box = s.tree.bounds();
-        for (int q = 0; q < 300; ++q) {
-            Vec3 p = random_point(box.min.array() - 0.2, box.max.array() + 0.2, rng);
-            if (q % 3 == 0)
-                p = 0.5 * (box.min + box.max) + 0.1 * (p - 0.5 * (box.min + box.max)); // deep inside
-            if (q % 5 == 0)
-                p = (p * 6.0).array().round() / 6.0; // grid planes of the box: ties
-            const test::BruteForceNearest brute = test::brute_force_nearest(s, p);
-            const double best = brute.squared_distance;
-            const Index best_face = brute.face;
-            const AabbTree::Nearest got = s.tree.nearest(s.vertices, p);
-            ASSERT_EQ(got.face, best_face) << s.name << " query " << q;
-            ASSERT_EQ(got.distance, std::sqrt(best)) << s.name << " query " << q;
-        }
-    }
-}
-
-TEST(AabbTree, NearestWithPlanesOfALargeTreeEqualsBruteForce)
-{
-    // Enough nodes for update_planes' parallel path; deep and shallow points.
-    std::mt19937 rng(13);
-    ContactSurface s = surface_of(make_sphere(Vec3(0.0, 0.0, 0.0), 1.0, 24), "large sphere");
-    s.vertices = deform(s.vertices, rng);
-    s.tree.refit(s.vertices);
-    ASSERT_GT(s.faces.rows(), 6000);
-    tbb::task_arena(2).execute([&] { s.tree.update_planes(s.vertices); });
-    for (int q = 0; q < 60; ++q) {
-        const Vec3 p = random_point(Vec3::Constant(q % 2 == 0 ? -0.3 : -1.2), Vec3::Constant(q % 2 == 0 ? 0.3 : 1.2), rng);
-        const test::BruteForceNearest brute = test::brute_force_nearest(s, p);
-        const double best = brute.squared_distance;
-        const Index best_face = brute.face;
-        const AabbTree::Nearest got = s.tree.nearest(s.vertices, p);
-        ASSERT_EQ(got.face, best_face) << "query " << q;
-        ASSERT_EQ(got.distance, std::sqrt(best)) << "query " << q;
-    }
 }
 
 TEST(AabbTree, NearestAndAxisLineFromAFarPoint)
@@ -382,13 +295,13 @@ TEST(AabbTree, NearestAndAxisLineFromAFarPoint)
     // Squared distances beyond the float range: nothing may be pruned before a face is found.
     const ContactSurface s = surface_of(make_sphere(Vec3(0.0, 0.0, 0.0), 1.0, 6), "sphere");
     const Vec3 p(3e19, 1e19, -2e19);
-    const AabbTree::Nearest got = s.tree.nearest(s.vertices, p);
+    const NearestPoint got = s.tree.nearest(s.vertices, p);
     ASSERT_GE(got.face, 0);
     const double best = test::brute_force_nearest(s, p).squared_distance;
     EXPECT_EQ(got.distance, std::sqrt(best));
     // The x line through (−3e19, 0.1, 0.2) crosses the sphere: faces are visited.
     int visits = 0;
-    s.tree.faces_on_axis_line(s.vertices, Vec3(-3e19, 0.1, 0.2), 0, 0.0, [&](Index) {
+    detail::faces_on_axis_line(s.tree, s.vertices, Vec3(-3e19, 0.1, 0.2), 0, 0.0, [&](Index) {
         ++visits;
         return std::numeric_limits<double>::infinity();
     });

@@ -4,6 +4,8 @@
 #include <corocontact/contact/winding_number.hpp>
 #include <corocontact/core/primitives.hpp>
 
+#include "detail/inside_tests.hpp"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -103,7 +105,7 @@ int expect_vertices_match_box(const ContactSurface& a, const ContactSurface& b, 
         const bool on = !inside && in_closed(p, min, max);
         EXPECT_EQ(r.inside, inside) << a.name << " vertex " << v << " (" << p.transpose() << ") in " << b.name;
         EXPECT_EQ(r.on_surface, on) << a.name << " vertex " << v << " (" << p.transpose() << ") on " << b.name;
-        fallbacks += r.deciding_axis == 3 ? 1 : 0;
+        fallbacks += r.decided_by == DecidedBy::WINDING_NUMBER ? 1 : 0;
     }
     return fallbacks;
 }
@@ -156,7 +158,7 @@ TEST(InsideTest, DecidingCrossingBoundsTheDepth)
     for (Index v = 0; v < a.surface.vertices.rows(); ++v) {
         const Vec3 p = a.surface.vertices.row(v).transpose();
         const InsideTest r = exact(b.surface, p);
-        if (!r.inside || r.deciding_axis > 2)
+        if (!r.inside || axis_of(r.decided_by) < 0)
             continue;
         ++decided;
         ASSERT_GE(r.crossing_face, 0);
@@ -314,7 +316,7 @@ TEST(InsideTest, OpenSurfaceUsesTheWindingNumber)
     ASSERT_FALSE(b.closed);
     const InsideTest r = exact(b, Vec3(0.3, 0.4, 0.5));
     EXPECT_TRUE(r.inside);
-    EXPECT_EQ(r.deciding_axis, 3);
+    EXPECT_EQ(r.decided_by, DecidedBy::WINDING_NUMBER);
     EXPECT_FALSE(exact(b, Vec3(1.3, 0.4, 0.5)).inside);
 }
 
@@ -403,12 +405,12 @@ TEST(AxisTest, CompetingCrossingsThatDisagreeDoNotDecide)
     EXPECT_EQ(axis_test(b, p, 0, DetectionMode::EXACT, NO_FACES, TOL), AxisOutcome::DEGENERATE);
     const InsideTest r = exact(b, p);
     EXPECT_TRUE(r.inside);
-    EXPECT_EQ(r.deciding_axis, 1);
+    EXPECT_EQ(r.decided_by, DecidedBy::Y_AXIS);
 }
 
 namespace {
 
-/// inside_tests() (packets of up to AabbTree::AXIS_PACKET x-axis lines walked together) gives
+/// inside_tests() (packets of up to AXIS_PACKET x-axis lines walked together) gives
 /// every point the same result as inside_test(), field for field, for every packet size: the
 /// points are cut into runs of 1, 2, …, 9 so that packets of all widths (and a run longer than
 /// one packet) occur. Returns how many points x did not decide.
@@ -418,7 +420,7 @@ int expect_packets_match_single(const ContactSurface& b, const std::vector<Vec3>
     std::size_t begin = 0;
     for (Index run = 1; begin < points.size(); run = run % 9 + 1) {
         const Index n = std::min<Index>(run, static_cast<Index>(points.size() - begin));
-        inside_tests(b, points.data() + begin, n, DetectionMode::EXACT, NO_FACES, TOL, packed.data() + begin);
+        detail::inside_tests(b, points.data() + begin, n, DetectionMode::EXACT, NO_FACES, TOL, packed.data() + begin);
         begin += static_cast<std::size_t>(n);
     }
     int not_x = 0;
@@ -427,10 +429,10 @@ int expect_packets_match_single(const ContactSurface& b, const std::vector<Vec3>
         const InsideTest& p = packed[i];
         EXPECT_EQ(p.inside, single.inside) << "point " << i << " (" << points[i].transpose() << ")";
         EXPECT_EQ(p.on_surface, single.on_surface) << "point " << i;
-        EXPECT_EQ(p.deciding_axis, single.deciding_axis) << "point " << i;
+        EXPECT_EQ(p.decided_by, single.decided_by) << "point " << i;
         EXPECT_EQ(p.surface_distance_bound, single.surface_distance_bound) << "point " << i; // bitwise
         EXPECT_EQ(p.crossing_face, single.crossing_face) << "point " << i;
-        not_x += single.deciding_axis != 0 ? 1 : 0;
+        not_x += single.decided_by != DecidedBy::X_AXIS ? 1 : 0;
     }
     return not_x;
 }

@@ -4,11 +4,13 @@
 #include <corocontact/contact/winding_number.hpp>
 #include <corocontact/core/primitives.hpp>
 
+#include "detail/clear_edge_groups.hpp"
+#include "detail/tree_access.hpp"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <array>
-#include <thread>
 #include <vector>
 
 using namespace coro;
@@ -52,12 +54,14 @@ Pairs sorted(Pairs pairs)
 
 /// clear_edge_groups() of a's candidates against b, as each candidate's decider: the index of
 /// its group's first candidate. Checks the groups' numbering on the way.
-std::vector<Index> deciders(const ContactSurface& a, const ContactSurface& b, const Pairs& pairs, int column,
-                            const std::vector<Index>& candidates, std::vector<double>* path)
+std::vector<Index> deciders(const ContactSurface& a, const ContactSurface& b, const Pairs& pairs,
+                            detail::PairColumn column, const std::vector<Index>& candidates, std::vector<double>* path,
+                            detail::GroupScratch* scratch = nullptr)
 {
     std::vector<Index> group, firsts;
-    const Index groups = a.tree.clear_edge_groups(a.vertices, b.tree, b.vertices, pairs, column, candidates, group,
-                                                  firsts, path);
+    detail::GroupScratch own;
+    const Index groups = detail::clear_edge_groups(a, b, pairs, column, candidates, scratch ? *scratch : own, group,
+                                                   firsts, path);
     EXPECT_EQ(static_cast<std::size_t>(groups), firsts.size());
     EXPECT_EQ(group.size(), candidates.size());
     EXPECT_TRUE(std::is_sorted(firsts.begin(), firsts.end()));
@@ -74,26 +78,19 @@ std::vector<Index> deciders(const ContactSurface& a, const ContactSurface& b, co
 void expect_pairs_match_brute_force(const ContactSurface& a, const ContactSurface& b, const Aabb& region)
 {
     Pairs pairs;
-    a.tree.overlapping_faces(a.vertices, b.tree, b.vertices, region, pairs);
+    a.tree.overlapping_faces(b.tree, region, pairs);
     const Pairs expected = brute_force_pairs(a, b, region);
     ASSERT_GT(expected.size(), 50u);
-    EXPECT_EQ(sorted(pairs), expected); // each pair once
     Pairs again;
-    a.tree.overlapping_faces(a.vertices, b.tree, b.vertices, region, again);
+    a.tree.overlapping_faces(b.tree, region, again);
     EXPECT_EQ(again, pairs); // the same order every time
-
-    // The slot pairs hold every exact pair, and others only where the boxes meet within float
-    // rounding (here: when grown by a relative 10⁻⁶).
-    Pairs slots;
-    a.tree.overlapping_slots(b.tree, region, slots);
-    Pairs from_slots;
-    for (const auto& [slot_a, slot_b] : slots)
-        from_slots.push_back({a.tree.slot_face(slot_a), b.tree.slot_face(slot_b)});
-    from_slots = sorted(from_slots);
-    EXPECT_TRUE(std::adjacent_find(from_slots.begin(), from_slots.end()) == from_slots.end()) << "a pair twice";
-    EXPECT_TRUE(std::includes(from_slots.begin(), from_slots.end(), expected.begin(), expected.end()));
+    // Every pair of exact boxes is there, each once, and others only where the boxes meet within
+    // float rounding (here: when grown by a relative 10⁻⁶).
+    const Pairs got = sorted(pairs);
+    EXPECT_TRUE(std::adjacent_find(got.begin(), got.end()) == got.end()) << "a pair twice";
+    EXPECT_TRUE(std::includes(got.begin(), got.end(), expected.begin(), expected.end()));
     const double grow = 1e-6 * (region.max - region.min).norm();
-    for (const auto& [f, g] : from_slots)
+    for (const auto& [f, g] : got)
         EXPECT_TRUE(face_box(a, f).inflated(grow).overlaps(face_box(b, g)) &&
                     face_box(a, f).inflated(grow).overlaps(region) && face_box(b, g).inflated(grow).overlaps(region))
             << "faces " << f << ", " << g;
@@ -108,9 +105,9 @@ Index expect_groups_agree_with_winding_numbers(const ContactSurface& a, const Co
     std::vector<Index> candidates;
     a.tree.vertices_in_box(a.vertices, region, candidates);
     Pairs pairs;
-    a.tree.overlapping_slots(b.tree, region, pairs);
+    detail::overlapping_slots(a.tree, b.tree, region, pairs);
     std::vector<double> path;
-    const std::vector<Index> decider = deciders(a, b, pairs, 0, candidates, &path);
+    const std::vector<Index> decider = deciders(a, b, pairs, detail::PairColumn::FIRST, candidates, &path);
     EXPECT_EQ(decider.size(), candidates.size());
     EXPECT_EQ(path.size(), candidates.size());
     Index firsts = 0;
@@ -182,7 +179,7 @@ TEST(OverlappingFaces, EmptyWhenTheBoxesMiss)
     const ContactSurface a = deformed_ball(Vec3::Zero(), 1.0, 6, 0.0, "a");
     const ContactSurface b = deformed_ball(Vec3(3, 0, 0), 1.0, 6, 0.0, "b");
     Pairs pairs{{1, 2}};
-    a.tree.overlapping_faces(a.vertices, b.tree, b.vertices, a.tree.bounds().intersection(b.tree.bounds()), pairs);
+    a.tree.overlapping_faces(b.tree, a.tree.bounds().intersection(b.tree.bounds()), pairs);
     EXPECT_TRUE(pairs.empty());
 }
 
@@ -209,10 +206,10 @@ TEST(ClearEdgeGroups, GroupsAgreeWithWindingNumbersOnATwistedBarThroughATorus)
     EXPECT_GE(expect_groups_agree_with_winding_numbers(torus, b), 2);
 }
 
-TEST(ClearEdgeGroups, GroupsDoNotDependOnEarlierCalls)
+TEST(ClearEdgeGroups, GroupsDoNotDependOnEarlierCallsWithTheSameScratch)
 {
-    // The grouping keeps per-thread arrays from call to call: a call after others, on other trees
-    // and over larger regions, gives what it gives on a thread of its own.
+    // The grouping keeps its arrays from call to call: a call after others, on other surfaces
+    // and over larger regions, gives what it gives with a fresh scratch.
     const ContactSurface a = deformed_ball(Vec3::Zero(), 1.0, 10, 0.06, "a");
     const ContactSurface b = deformed_ball(Vec3(0.7, 0.1, -0.05), 0.9, 9, 0.05, "b");
     const Aabb small{Vec3(0.3, 0.3, -0.4), Vec3(0.9, 1.0, 0.4)};
@@ -220,29 +217,31 @@ TEST(ClearEdgeGroups, GroupsDoNotDependOnEarlierCalls)
         std::vector<Index> decider;
         std::vector<double> path;
     };
-    const auto groups = [](const ContactSurface& s, const ContactSurface& other, const Aabb& region) {
+    const auto groups = [](const ContactSurface& s, const ContactSurface& other, const Aabb& region,
+                           detail::GroupScratch* scratch) {
         std::vector<Index> candidates;
         s.tree.vertices_in_box(s.vertices, region, candidates);
         Pairs pairs;
-        s.tree.overlapping_slots(other.tree, region, pairs);
+        detail::overlapping_slots(s.tree, other.tree, region, pairs);
         Groups g;
-        g.decider = deciders(s, other, pairs, 0, candidates, &g.path);
+        g.decider = deciders(s, other, pairs, detail::PairColumn::FIRST, candidates, &g.path, scratch);
         return g;
     };
-    // Each call on a thread of its own, then all on this one, one after the other.
     const Aabb overlap = a.tree.bounds().intersection(b.tree.bounds());
     const std::array<std::array<const ContactSurface*, 2>, 3> calls{{{&b, &a}, {&a, &b}, {&a, &b}}};
     const std::array<Aabb, 3> regions{overlap, overlap, small};
-    std::array<Groups, 3> alone;
+    std::array<Groups, 3> fresh;
     for (std::size_t c = 0; c < calls.size(); ++c)
-        std::thread([&] { alone[c] = groups(*calls[c][0], *calls[c][1], regions[c]); }).join();
-    ASSERT_GT(alone[2].decider.size(), 20u);
-    ASSERT_LT(alone[2].decider.size(), alone[1].decider.size() / 2);
-    for (std::size_t c = 0; c < calls.size(); ++c) {
-        const Groups after = groups(*calls[c][0], *calls[c][1], regions[c]);
-        EXPECT_EQ(after.decider, alone[c].decider) << "call " << c;
-        EXPECT_EQ(after.path, alone[c].path) << "call " << c;
-    }
+        fresh[c] = groups(*calls[c][0], *calls[c][1], regions[c], nullptr);
+    ASSERT_GT(fresh[2].decider.size(), 20u);
+    ASSERT_LT(fresh[2].decider.size(), fresh[1].decider.size() / 2);
+    detail::GroupScratch shared;
+    for (int round = 0; round < 2; ++round)
+        for (std::size_t c = 0; c < calls.size(); ++c) {
+            const Groups after = groups(*calls[c][0], *calls[c][1], regions[c], &shared);
+            EXPECT_EQ(after.decider, fresh[c].decider) << "call " << c;
+            EXPECT_EQ(after.path, fresh[c].path) << "call " << c;
+        }
 }
 
 TEST(ClearEdgeGroups, VerticesOnTheOtherSurfaceStandAlone)
@@ -256,9 +255,9 @@ TEST(ClearEdgeGroups, VerticesOnTheOtherSurfaceStandAlone)
     a.tree.vertices_in_box(a.vertices, region, candidates);
     ASSERT_FALSE(candidates.empty());
     Pairs pairs;
-    a.tree.overlapping_slots(b.tree, region, pairs);
+    detail::overlapping_slots(a.tree, b.tree, region, pairs);
     std::vector<double> path;
-    const std::vector<Index> decider = deciders(a, b, pairs, 0, candidates, &path);
+    const std::vector<Index> decider = deciders(a, b, pairs, detail::PairColumn::FIRST, candidates, &path);
     int on_surface = 0;
     for (std::size_t i = 0; i < candidates.size(); ++i) {
         const Vec3 p = a.vertices.row(candidates[i]).transpose();
@@ -271,16 +270,16 @@ TEST(ClearEdgeGroups, VerticesOnTheOtherSurfaceStandAlone)
     }
     EXPECT_EQ(on_surface, 2); // (1, 0.5, 0.5) and (1, 0.5, 1)
 
-    // The other way round, with the slots of the pairs in the second column.
+    // The other way round, with b's slots in the second column of the pairs.
     Pairs reversed = pairs;
     for (auto& pair : reversed)
         std::swap(pair[0], pair[1]);
     std::vector<Index> b_candidates;
     b.tree.vertices_in_box(b.vertices, region, b_candidates);
-    const std::vector<Index> b_decider = deciders(b, a, pairs, 1, b_candidates, &path);
+    const std::vector<Index> b_decider = deciders(b, a, pairs, detail::PairColumn::SECOND, b_candidates, &path);
     for (std::size_t i = 0; i < b_candidates.size(); ++i)
         EXPECT_EQ(b_decider[i], static_cast<Index>(i)); // all of B's candidates lie on A's +x face
-    EXPECT_EQ(deciders(b, a, reversed, 0, b_candidates, &path), b_decider);
+    EXPECT_EQ(deciders(b, a, reversed, detail::PairColumn::FIRST, b_candidates, &path), b_decider);
 }
 
 } // namespace

@@ -4,9 +4,15 @@
 #include <corocontact/core/primitives.hpp>
 #include <corocontact/core/surface_mesh.hpp>
 
+#include "detail/tree_access.hpp"
+
+#include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <array>
 #include <cmath>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -78,6 +84,51 @@ TEST(UpdateSurfaces, EqualsUpdatingEachInTurnAndLeavesTheRestAlone)
         EXPECT_EQ(got[i].other, expected[i].other);
         EXPECT_EQ(got[i].depth, expected[i].depth);
     }
+}
+
+TEST(SurfaceEdges, ListEveryEdgeFromBothEndsWithItsFacesAndTheirTreeSlots)
+{
+    const TetMesh ball = make_sphere(Vec3(0.1, 0.2, 0.3), 0.7, 6);
+    const ContactSurface s = ContactSurface::from_body("ball", ball.rest_positions, boundary_faces(ball));
+    // Brute force: each unordered vertex pair that is a side of some face, with those faces.
+    std::set<std::array<Index, 2>> sides;
+    for (Index f = 0; f < s.faces.rows(); ++f)
+        for (int c = 0; c < 3; ++c)
+            sides.insert({std::min(s.faces(f, c), s.faces(f, (c + 1) % 3)), std::max(s.faces(f, c), s.faces(f, (c + 1) % 3))});
+    const SurfaceEdges& e = s.edges;
+    ASSERT_EQ(e.start.size(), static_cast<std::size_t>(s.vertices.rows()) + 1);
+    ASSERT_EQ(e.vertex.size(), 2 * sides.size());
+    ASSERT_EQ(e.faces.size(), e.vertex.size());
+    ASSERT_EQ(e.tree_slots.size(), e.vertex.size());
+    const auto& face_of_slot = detail::TreeAccess::face_of_slot(s.tree);
+    for (Index v = 0; v < s.vertices.rows(); ++v) {
+        for (Index k = e.start[static_cast<std::size_t>(v)]; k < e.start[static_cast<std::size_t>(v) + 1]; ++k) {
+            const auto kk = static_cast<std::size_t>(k);
+            const Index w = e.vertex[kk];
+            EXPECT_EQ(sides.count({std::min(v, w), std::max(v, w)}), 1u) << v << "-" << w;
+            if (k > e.start[static_cast<std::size_t>(v)]) {
+                EXPECT_LT(e.vertex[kk - 1], w) << "edges of " << v << " ordered by their other end";
+            }
+            for (int j = 0; j < 2; ++j) {
+                const Index f = e.faces[kk][static_cast<std::size_t>(j)];
+                const auto row = s.faces.row(f);
+                EXPECT_TRUE((row.array() == v).any() && (row.array() == w).any()) << "face " << f;
+                EXPECT_EQ(face_of_slot[static_cast<std::size_t>(e.tree_slots[kk][static_cast<std::size_t>(j)])], f);
+            }
+            EXPECT_NE(e.faces[kk][0], e.faces[kk][1]); // a closed surface: two faces per edge
+        }
+    }
+}
+
+TEST(SurfaceEdges, DetectionRefusesASurfaceWhoseEdgesWereNotBuiltWithIt)
+{
+    const TetMesh box = make_box(Vec3(0, 0, 0), Vec3(1, 1, 1), {2, 2, 2});
+    const TetMesh other = make_box(Vec3(0.5, 0.5, 0.5), Vec3(1.5, 1.5, 1.5), {2, 2, 2});
+    std::vector<ContactSurface> surfaces{ContactSurface::from_body("a", box.rest_positions, boundary_faces(box)),
+                                         ContactSurface::from_body("b", other.rest_positions, boundary_faces(other))};
+    surfaces[0].edges = surface_edges(surfaces[0].faces, static_cast<Index>(surfaces[0].vertices.rows()));
+    EXPECT_THAT([&] { detect_contacts(surfaces, DetectionSettings{}); },
+                testing::ThrowsMessage<InputError>(testing::HasSubstr("surface 'a'")));
 }
 
 } // namespace

@@ -1,3 +1,4 @@
+#include "brute_force_nearest.hpp"
 #include "contact_scenes.hpp"
 #include "near.hpp"
 
@@ -8,6 +9,7 @@
 #include <tbb/task_arena.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <map>
 #include <tuple>
@@ -23,7 +25,11 @@ ContactSurface box_surface(const Vec3& min, const Vec3& max, const std::array<In
 }
 
 using Key = std::tuple<Index, Index, Index>;
-Key key(const ContactPoint& c) { return {c.body, c.vertex, c.other}; }
+Key key(const ContactPoint& c)
+{
+    EXPECT_TRUE(c.other.is_surface());
+    return {c.body, c.vertex, c.other.index};
+}
 
 std::vector<Key> keys(const std::vector<ContactPoint>& points)
 {
@@ -141,6 +147,65 @@ TEST(DetectContacts, SharedAnswersChangeNothingButTheWork)
     EXPECT_EQ(s2.by_neighbour, 0);
 }
 
+TEST(DetectContacts, DepthNormalAndFaceAreTheBruteForceNearestPointOfEveryContact)
+{
+    // Every inside vertex's nearest point, against a scan of every face of the other surface
+    // (closest_point_on_triangle, the smallest face index of equally near ones): the same face
+    // and depth bit for bit, that face's unit normal, the point's barycentric weights. A pile and
+    // a deep overlap, where many vertices lie far inside (nearly equally far from much of the
+    // other surface).
+    std::vector<ContactSurface> deep;
+    deep.push_back(deformed_ball(Vec3(0, 0, 0), 1.0, 12, 0.06, "a"));
+    deep.push_back(deformed_ball(Vec3(0.6, 0.05, -0.03), 1.0, 11, 0.05, "b"));
+    for (const std::vector<ContactSurface>& surfaces : {pile_scene(), deep}) {
+        const auto points = detect_contacts(surfaces, DetectionSettings{});
+        ASSERT_GT(points.size(), 200u);
+        double deepest = 0.0;
+        for (const ContactPoint& c : points) {
+            const ContactSurface& b = surfaces[static_cast<std::size_t>(c.other.index)];
+            const Vec3 p = surfaces[static_cast<std::size_t>(c.body)].vertices.row(c.vertex).transpose();
+            const test::BruteForceNearest brute = test::brute_force_nearest(b, p);
+            ASSERT_EQ(c.face, brute.face) << c.body << " vertex " << c.vertex;
+            ASSERT_EQ(c.depth, std::sqrt(brute.squared_distance)) << c.body << " vertex " << c.vertex;
+            const Vec3 x0 = b.vertices.row(b.faces(c.face, 0)).transpose();
+            const Vec3 x1 = b.vertices.row(b.faces(c.face, 1)).transpose();
+            const Vec3 x2 = b.vertices.row(b.faces(c.face, 2)).transpose();
+            ASSERT_EQ(c.normal, (x1 - x0).cross(x2 - x0).normalized());
+            const TrianglePoint t = closest_point_on_triangle(p, x0, x1, x2);
+            ASSERT_EQ(c.barycentric, t.barycentric);
+            deepest = std::max(deepest, c.depth);
+        }
+        EXPECT_GT(deepest, 0.2);
+    }
+}
+
+TEST(DetectContacts, AScratchKeptFromCallToCallChangesNoAnswer)
+{
+    // One scratch through scenes of different sizes and back, with and without contact data:
+    // every answer bit for bit that of a scratch of its own.
+    std::vector<ContactSurface> deep = pile_scene();
+    deep.push_back(deformed_ball(Vec3(0.3, 0.1, 0.0), 0.9, 12, 0.06, "deep5"));
+    const std::vector<ContactSurface> two{deformed_ball(Vec3(0, 0, 0), 1.0, 9, 0.06, "a"),
+                                          deformed_ball(Vec3(0.8, 0.1, 0.0), 0.8, 8, 0.05, "b")};
+    DetectionSettings inside_only;
+    inside_only.contact_data = false;
+    DetectionScratch scratch;
+    for (int round = 0; round < 2; ++round)
+        for (const std::vector<ContactSurface>* surfaces : std::array<const std::vector<ContactSurface>*, 3>{&deep, &two, &deep})
+            for (const DetectionSettings& settings : {DetectionSettings{}, inside_only}) {
+                const auto kept = detect_contacts(*surfaces, settings, scratch);
+                const auto own = detect_contacts(*surfaces, settings);
+                ASSERT_EQ(kept.size(), own.size());
+                ASSERT_FALSE(own.empty());
+                for (std::size_t i = 0; i < own.size(); ++i) {
+                    ASSERT_EQ(key(kept[i]), key(own[i])) << "contact " << i;
+                    ASSERT_EQ(kept[i].depth, own[i].depth) << "contact " << i;
+                    ASSERT_EQ(kept[i].face, own[i].face) << "contact " << i;
+                    ASSERT_EQ(kept[i].normal, own[i].normal) << "contact " << i;
+                }
+            }
+}
+
 TEST(DetectContacts, DepthAndNormalOfSmallBoxesPushedIntoALargeBox)
 {
     // B = [0, 10]³. A small box enters B's +x face by 0.2, another its −y face by 0.3, a third
@@ -155,7 +220,7 @@ TEST(DetectContacts, DepthAndNormalOfSmallBoxesPushedIntoALargeBox)
     const std::map<Index, std::pair<double, Vec3>> expected{
         {1, {0.2, Vec3(1, 0, 0)}}, {2, {0.3, Vec3(0, -1, 0)}}, {3, {0.05, Vec3(0, 0, 1)}}};
     for (const ContactPoint& c : points) {
-        ASSERT_EQ(c.other, 0);
+        ASSERT_EQ(c.other, ContactTarget::surface(0));
         const auto& [depth, normal] = expected.at(c.body);
         const Vec3 p = s[static_cast<std::size_t>(c.body)].vertices.row(c.vertex).transpose();
         EXPECT_NEAR_REL(c.depth, depth, 1e-12, 1e-9) << s[static_cast<std::size_t>(c.body)].name;
@@ -257,15 +322,38 @@ TEST(DetectContacts, CallerSuppliedInsideTestRunsTheSamePipeline)
     const std::vector<ContactSurface> surfaces = pile_scene();
     DetectionStats stats, stats_fn;
     const auto points = detect_contacts(surfaces, DetectionSettings{}, &stats);
-    const auto via_function = detect_contacts(
-        surfaces,
-        [&](Index other, const Vec3& p) {
-            return inside_test(surfaces[static_cast<std::size_t>(other)], p, DetectionMode::BRUTE_FORCE, {},
-                               AxisRayTolerances());
-        },
-        &stats_fn);
+    CustomNarrowPhase brute;
+    brute.inside = [&](Index other, const Vec3& p) {
+        return inside_test(surfaces[static_cast<std::size_t>(other)], p, DetectionMode::BRUTE_FORCE, {},
+                           AxisRayTolerances());
+    };
+    const auto via_function = detect_contacts(surfaces, brute, true, &stats_fn);
     EXPECT_EQ(keys(points), keys(via_function));
     EXPECT_EQ(stats.candidate_vertices, stats_fn.candidate_vertices);
+    for (std::size_t i = 0; i < points.size(); ++i) { // the trees' depth searches: the same answers
+        ASSERT_EQ(points[i].depth, via_function[i].depth) << "contact " << i;
+        ASSERT_EQ(points[i].face, via_function[i].face) << "contact " << i;
+    }
+    // A caller's depth search too: its answers are taken as they come.
+    brute.nearest = [&](Index other, const Vec3& p, double) {
+        const ContactSurface& b = surfaces[static_cast<std::size_t>(other)];
+        NearestPoint n;
+        const test::BruteForceNearest f = test::brute_force_nearest(b, p);
+        n.face = f.face;
+        n.distance = std::sqrt(f.squared_distance);
+        const TrianglePoint t = closest_point_on_triangle(p, b.vertices.row(b.faces(f.face, 0)).transpose(),
+                                                          b.vertices.row(b.faces(f.face, 1)).transpose(),
+                                                          b.vertices.row(b.faces(f.face, 2)).transpose());
+        n.point = t.point;
+        n.barycentric = t.barycentric;
+        return n;
+    };
+    const auto with_nearest = detect_contacts(surfaces, brute, true);
+    ASSERT_EQ(with_nearest.size(), points.size());
+    for (std::size_t i = 0; i < points.size(); ++i) {
+        ASSERT_EQ(points[i].depth, with_nearest[i].depth) << "contact " << i;
+        ASSERT_EQ(points[i].normal, with_nearest[i].normal) << "contact " << i;
+    }
 }
 
 TEST(ContactCandidates, VerticesInsideTheOverlapAndThePapersFaces)

@@ -1,7 +1,7 @@
 // segment_misses_triangles (up to four triangles per call, AVX2 lanes where the build has them)
 // against segment_misses_triangle, one triangle at a time: the same answer for every triangle,
 // on random configurations and on degenerate ones where signs are zero or within rounding.
-#include "segment_triangle.hpp"
+#include "detail/segment_triangle.hpp"
 
 #include <gtest/gtest.h>
 

@@ -1,6 +1,7 @@
 #include "mesh_fixtures.hpp"
 
 #include <corocontact/core/error.hpp>
+#include <corocontact/core/primitives.hpp>
 #include <corocontact/core/tet_mesh.hpp>
 
 #include <gmock/gmock.h>
@@ -9,6 +10,7 @@
 #include <limits>
 
 using namespace coro;
+using ::testing::AllOf;
 using ::testing::HasSubstr;
 using ::testing::ThrowsMessage;
 
@@ -65,6 +67,99 @@ TEST(ValidateAndOrient, RejectsMeshWithoutTets)
     mesh.tets.resize(0, 4);
     EXPECT_THAT([&] { validate_and_orient(mesh, "empty.msh"); },
                 ThrowsMessage<InputError>(HasSubstr("empty.msh: the mesh has no tetrahedra")));
+}
+
+TEST(FindDuplicateTet, FindsTheEarliestRepeatInAnyNodeOrder)
+{
+    TetMesh mesh = make_box(Vec3::Zero(), Vec3::Ones(), {2, 1, 1});
+    EXPECT_FALSE(find_duplicate_tet(mesh.tets).has_value());
+    const Index n = mesh.num_tets();
+    Tets tets(n + 2, 4);
+    tets.topRows(n) = mesh.tets;
+    tets.row(n) << mesh.tets(7, 3), mesh.tets(7, 1), mesh.tets(7, 0), mesh.tets(7, 2); // tet 7 again
+    tets.row(n + 1) = mesh.tets.row(2);                                                    // tet 2 again
+    const auto duplicate = find_duplicate_tet(tets);
+    ASSERT_TRUE(duplicate.has_value());
+    EXPECT_EQ(duplicate->first, 7);
+    EXPECT_EQ(duplicate->second, n);
+}
+
+TEST(ValidateAndOrient, RejectsATetListedTwiceNamingBoth)
+{
+    TetMesh mesh = make_box(Vec3::Zero(), Vec3::Ones(), {1, 1, 1});
+    mesh.tets.conservativeResize(7, 4);
+    mesh.tets.row(6) << mesh.tets(4, 1), mesh.tets(4, 0), mesh.tets(4, 2), mesh.tets(4, 3); // inverted copy
+    EXPECT_THAT([&] { validate_and_orient(mesh, "twice.vtu"); },
+                ThrowsMessage<InputError>(HasSubstr("twice.vtu: tet 6 has the same 4 nodes as tet 4")));
+}
+
+TEST(FindOverlappingTets, NoneInGeneratedMeshes)
+{
+    for (const TetMesh& mesh : {make_box(Vec3::Zero(), Vec3(2, 1, 3), {3, 2, 4}),
+                                make_sphere(Vec3::Zero(), 1.0, 4), test::irregular_box(3, 0.2, 7)}) {
+        TetMesh oriented = mesh;
+        validate_and_orient(oriented, "m");
+        EXPECT_FALSE(find_overlapping_tets(oriented).has_value());
+    }
+}
+
+TEST(FindOverlappingTets, FindsTetsOnTheSameSideOfTheirFace)
+{
+    TetMesh mesh = test::unit_tet(); // nodes 0..3 at the origin and the unit points
+    mesh.rest_positions.conservativeResize(5, 3);
+    mesh.rest_positions.row(4) << 0.2, 0.2, 0.2; // above face (0, 1, 2), like node 3
+    mesh.tets.conservativeResize(2, 4);
+    mesh.tets.row(1) << 0, 1, 2, 4;
+    const auto overlap = find_overlapping_tets(mesh);
+    ASSERT_TRUE(overlap.has_value());
+    EXPECT_EQ(overlap->first, 0);
+    EXPECT_EQ(overlap->second, 1);
+    EXPECT_EQ(overlap->face, (std::array<Index, 3>{0, 1, 2}));
+    EXPECT_FALSE(overlap->shared_by_more);
+    EXPECT_THAT([&] { validate_and_orient(mesh, "folded.msh"); },
+                ThrowsMessage<InputError>(
+                    HasSubstr("folded.msh: tets 0 and 1 lie on the same side of their shared face (0, 1, 2)")));
+
+    mesh.rest_positions.row(4) << 0.2, 0.2, -0.2; // below it: a valid two-tet mesh
+    validate_and_orient(mesh, "m");
+    EXPECT_FALSE(find_overlapping_tets(mesh).has_value());
+}
+
+TEST(FindOverlappingTets, FindsAFaceSharedByThreeTets)
+{
+    TetMesh mesh = test::unit_tet();
+    mesh.rest_positions.conservativeResize(6, 3);
+    mesh.rest_positions.row(4) << 0.2, 0.2, -0.5;
+    mesh.rest_positions.row(5) << 0.1, 0.3, -0.7;
+    mesh.tets.conservativeResize(3, 4);
+    mesh.tets.row(1) << 0, 2, 1, 4;
+    mesh.tets.row(2) << 0, 2, 1, 5;
+    EXPECT_THAT([&] { validate_and_orient(mesh, "three.msh"); },
+                ThrowsMessage<InputError>(
+                    HasSubstr("three.msh: more than two tets share the face (0, 1, 2), among them tets 0 and 1")));
+    const auto overlap = find_overlapping_tets(mesh); // mesh is oriented by now
+    ASSERT_TRUE(overlap.has_value());
+    EXPECT_TRUE(overlap->shared_by_more);
+}
+
+TEST(ValidateAndOrient, RejectsCoordinatesWhoseVolumesOverflow)
+{
+    TetMesh mesh = test::unit_tet();
+    mesh.rest_positions *= 1e101;
+    EXPECT_THAT([&] { validate_and_orient(mesh, "huge.msh"); },
+                ThrowsMessage<InputError>(AllOf(HasSubstr("huge.msh: node 1 has the coordinate 1e+101"),
+                                                HasSubstr("at most 1e+100"))));
+}
+
+TEST(ValidateAndOrient, RejectsEdgesWhoseVolumesUnderflow)
+{
+    TetMesh mesh = test::unit_tet();
+    mesh.rest_positions *= 1e-110;
+    EXPECT_THAT([&] { validate_and_orient(mesh, "tiny.msh"); },
+                ThrowsMessage<InputError>(HasSubstr("tiny.msh: the tets' edges are")));
+    mesh = test::unit_tet();
+    mesh.rest_positions *= 1e-90; // small, but volumes of 1e-270 are still doubles
+    EXPECT_EQ(validate_and_orient(mesh, "small.msh"), 0);
 }
 
 TEST(MeanRatioQuality, IsOneForRegularTetAndSmallForSliver)

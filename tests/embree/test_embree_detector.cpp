@@ -140,7 +140,7 @@ TEST_F(EmbreeUnitCube, InsidePointIsInsideOnEveryAxis)
         EXPECT_EQ(m_scenes->axis_test(0, p, axis), AxisOutcome::INSIDE) << "axis " << axis;
     const InsideTest t = m_scenes->inside_test(0, p);
     EXPECT_TRUE(t.inside);
-    EXPECT_EQ(t.deciding_axis, 0);
+    EXPECT_EQ(t.decided_by, DecidedBy::X_AXIS);
 }
 
 class EmbreeUnitCubeAxis : public EmbreeUnitCube, public ::testing::WithParamInterface<int> {};
@@ -157,7 +157,7 @@ TEST_P(EmbreeUnitCubeAxis, OutsideAlongOneAxisHitsOnlyThatAxis)
         const InsideTest t = m_scenes->inside_test(0, p);
         EXPECT_FALSE(t.inside);
         EXPECT_FALSE(t.on_surface);
-        EXPECT_EQ(t.deciding_axis, 0); // x: OUTSIDE, or NO_HIT, which decides outside too
+        EXPECT_EQ(t.decided_by, DecidedBy::X_AXIS); // x: OUTSIDE, or NO_HIT, which decides outside too
     }
 }
 
@@ -193,7 +193,7 @@ TEST_F(EmbreeUnitCube, FarPointHasNoHitOnAnyAxis)
         EXPECT_EQ(m_scenes->axis_test(0, p, axis), AxisOutcome::NO_HIT);
     const InsideTest t = m_scenes->inside_test(0, p);
     EXPECT_FALSE(t.inside);
-    EXPECT_EQ(t.deciding_axis, 0);
+    EXPECT_EQ(t.decided_by, DecidedBy::X_AXIS);
 }
 
 TEST_F(EmbreeUnitCube, RayThroughSharedEdgeIsDegenerate)
@@ -224,7 +224,7 @@ TEST_F(EmbreeUnitCube, RayThroughSharedEdgeIsDegenerate)
     // The y and z lines of that point are clear of edges: they decide.
     const InsideTest t = m_scenes->inside_test(0, p);
     EXPECT_TRUE(t.inside);
-    EXPECT_EQ(t.deciding_axis, 1);
+    EXPECT_EQ(t.decided_by, DecidedBy::Y_AXIS);
 
     // The same edge seen from outside the cube.
     Vec3 q = p;
@@ -232,7 +232,7 @@ TEST_F(EmbreeUnitCube, RayThroughSharedEdgeIsDegenerate)
     EXPECT_EQ(m_scenes->axis_test(0, q, 0), AxisOutcome::DEGENERATE);
     const InsideTest u = m_scenes->inside_test(0, q);
     EXPECT_FALSE(u.inside);
-    EXPECT_EQ(u.deciding_axis, 1);
+    EXPECT_EQ(u.decided_by, DecidedBy::Y_AXIS);
 }
 
 TEST_F(EmbreeUnitCube, PointOnTheSurfaceIsOnSurfaceNotInside)
@@ -244,7 +244,7 @@ TEST_F(EmbreeUnitCube, PointOnTheSurfaceIsOnSurfaceNotInside)
     const InsideTest t = m_scenes->inside_test(0, Vec3(1.0, 0.4, 0.45));
     EXPECT_FALSE(t.inside);
     EXPECT_TRUE(t.on_surface);
-    EXPECT_EQ(t.deciding_axis, 0);
+    EXPECT_EQ(t.decided_by, DecidedBy::X_AXIS);
 }
 
 TEST(EmbreeScenes, CoincidentOppositeFacesAreDegenerate)
@@ -265,7 +265,7 @@ TEST(EmbreeScenes, CoincidentOppositeFacesAreDegenerate)
     EXPECT_EQ(scenes.axis_test(0, p, 1), AxisOutcome::INSIDE);
     const InsideTest t = scenes.inside_test(0, p);
     EXPECT_TRUE(t.inside);
-    EXPECT_EQ(t.deciding_axis, 1);
+    EXPECT_EQ(t.decided_by, DecidedBy::Y_AXIS);
 }
 
 TEST(EmbreeScenes, ManyLayersAlongTheAxis)
@@ -303,7 +303,7 @@ TEST(EmbreeScenes, RayThroughVertexFallsBackToWindingNumber)
         EXPECT_EQ(scenes.axis_test(0, p, axis), AxisOutcome::DEGENERATE) << "axis " << axis;
     const InsideTest t = scenes.inside_test(0, p);
     EXPECT_TRUE(t.inside);
-    EXPECT_EQ(t.deciding_axis, 3);
+    EXPECT_EQ(t.decided_by, DecidedBy::WINDING_NUMBER);
     const InsideTest out = scenes.inside_test(0, Vec3(1.2, 0.0, 0.0));
     EXPECT_FALSE(out.inside);
 }
@@ -453,7 +453,7 @@ TEST(DetectContactsEmbree, ReportsSortedDepthsAndNormalsOfTheOtherSphere)
         if (c.body != 0)
             continue;
         const Vec3 p = surfaces[0].vertices.row(c.vertex).transpose();
-        EXPECT_EQ(c.other, 1);
+        EXPECT_EQ(c.other, ContactTarget::surface(1));
         EXPECT_NEAR(c.depth, rb - (p - cb).norm(), sag + 1e-9) << "vertex " << c.vertex;
         EXPECT_GT(c.normal.dot((p - cb).normalized()), 0.9) << "vertex " << c.vertex;
         EXPECT_NEAR(c.normal.norm(), 1.0, 1e-12);
@@ -499,7 +499,7 @@ ContactPoint point(Index body, Index vertex, Index other)
     ContactPoint c;
     c.body = body;
     c.vertex = vertex;
-    c.other = other;
+    c.other = ContactTarget::surface(other);
     return c;
 }
 
@@ -528,7 +528,7 @@ TEST(CrossCheck, CountsDepthDisagreementsOfVerticesBothFoundInside)
         ContactPoint c;
         c.body = body;
         c.vertex = vertex;
-        c.other = 1 - body;
+        c.other = ContactTarget::surface(1 - body);
         c.face = face;
         c.depth = depth;
         return c;
@@ -609,10 +609,10 @@ TEST(EmbreeSceneSet, NearestIsTheBruteForceMinimumWithSmallestFaceOnTies)
             const double bound = q % 4 == 0   ? std::numeric_limits<double>::infinity()
                                  : q % 4 == 1 ? 0.5 * std::sqrt(best) // too small: searched again
                                               : std::sqrt(best) * 1.5;
-            const AabbTree::Nearest got = scenes.nearest(surface, s, p, bound);
+            const NearestPoint got = scenes.nearest(surface, s, p, bound);
             ASSERT_EQ(got.face, best_face) << surface.name << " query " << q;
             ASSERT_EQ(got.distance, std::sqrt(best)) << surface.name << " query " << q;
-            const AabbTree::Nearest tree = surface.tree.nearest(surface.vertices, p);
+            const NearestPoint tree = surface.tree.nearest(surface.vertices, p);
             EXPECT_EQ(got.point, tree.point) << surface.name << " query " << q;
             EXPECT_EQ(got.barycentric, tree.barycentric) << surface.name << " query " << q;
         }

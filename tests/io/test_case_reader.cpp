@@ -581,13 +581,17 @@ INSTANTIATE_TEST_SUITE_P(
         BadValue{"OutputEveryZero", sim("output_every = 0"), "case.toml:2:16: simulation.output_every:", "found the integer 0"},
         BadValue{"GravityNan", sim("gravity = [0, nan, 0]"), "case.toml:2:15: simulation.gravity[1]:", "finite"},
         BadValue{"NameWithSpace", sim("name = \"two spheres\""), "case.toml:2:8: simulation.name:", "letters, digits"},
-        BadValue{"NameEmpty", sim("name = \"\""), "case.toml:2:8: simulation.name:", "non-empty"},
+        BadValue{"NameEmpty", sim("name = \"\""), "case.toml:2:8: simulation.name:", "1 to 128"},
+        BadValue{"NameTooLong", sim("name = \"" + std::string(129, 'n') + "\""), "case.toml:2:8: simulation.name:", "(129 characters)"},
         BadValue{"OutputDirEmpty", sim("output_dir = \"\""), "case.toml:2:14: simulation.output_dir:", "empty"},
         BadValue{"MaxIterationsZero", solver("max_iterations = 0"), "case.toml:2:18: solver.max_iterations:", "found the integer 0"},
-        BadValue{"ToleranceNegative", solver("tolerance = -1e-6"), "case.toml:2:13: solver.tolerance:", "expected a number >= 0, found the floating-point number -1e-06"},
-        BadValue{"StaticToleranceNegative", solver("static_tolerance = -1e-8"), "case.toml:2:20: solver.static_tolerance:", "> 0"},
+        BadValue{"ToleranceNegative", solver("tolerance = -1e-6"), "case.toml:2:13: solver.tolerance:", "expected a number in [0, 1), found the floating-point number -1e-06"},
+        BadValue{"ToleranceOne", solver("tolerance = 1"), "case.toml:2:13: solver.tolerance:", "expected a number in [0, 1), found the integer 1"},
+        BadValue{"StaticToleranceNegative", solver("static_tolerance = -1e-8"), "case.toml:2:20: solver.static_tolerance:", "in (0, 1)"},
+        BadValue{"StaticToleranceAboveOne", solver("static_tolerance = 2.5"), "case.toml:2:20: solver.static_tolerance:", "in (0, 1)"},
         BadValue{"StaticMaxIterationsZero", solver("static_max_iterations = 0"), "case.toml:2:25: solver.static_max_iterations:", ">= 1"},
         BadValue{"PartsPerThreadZero", solver("parts_per_thread = 0"), "case.toml:2:20: solver.parts_per_thread:", "found the integer 0"},
+        BadValue{"PartsPerThreadHuge", solver("parts_per_thread = 100001"), "case.toml:2:20: solver.parts_per_thread:", "expected an integer >= 1 and <= 100000, found the integer 100001"},
         BadValue{"StiffnessZero", contact("stiffness = 0.0"), "case.toml:2:13: contact.stiffness:", "> 0"},
         BadValue{"DampingNegative", contact("damping = -0.1"), "case.toml:2:11: contact.damping:", "expected a number >= 0, found the floating-point number -0.1"},
         BadValue{"FrictionNegative", contact("friction = -1"), "case.toml:2:12: contact.friction:", ">= 0"},
@@ -602,15 +606,24 @@ INSTANTIATE_TEST_SUITE_P(
         BadValue{"RotateAxisZero", body("rotate_axis = [0, 0, 0]\nrotate_degrees = 30"), "case.toml:3:15: body[0].rotate_axis:", "nonzero axis"},
         BadValue{"VelocityNan", body("velocity = [nan, 0, 0]"), "case.toml:3:13: body[0].velocity[0]:", "finite"},
         BadValue{"CellsZero", body("cells = [1, 0, 1]"), "case.toml:3:13: body[0].cells[1]:", "found the integer 0"},
+        BadValue{"CellsBeyondAnIndex", body("cells = [2000, 2000, 2000]"), "case.toml:3:9: body[0].cells:", "[2000, 2000, 2000] makes 4.8e+10 tets and 8012006001 nodes, expected at most 2147483647 of each"},
+        BadValue{"CellsBeyondAnIndexByOne", body("cells = [2147483647, 1, 1]"), "case.toml:3:9: body[0].cells:", "expected at most 2147483647"},
+        BadValue{"ResolutionBeyondAnIndex", sphere("resolution = 711"), "case.toml:3:14: body[0].resolution:", "711 makes 2156552586 tets"},
+        BadValue{"TranslateHuge", body("translate = [0, 1e101, 0]"), "case.toml:3:13: body[0].translate:", "expected coordinates of magnitude at most 1e+100, found [0, 1e+101, 0]"},
+        BadValue{"BoxMaxHuge", body("max = [1e200, 1, 1]"), "case.toml:3:7: body[0].max:", "magnitude at most 1e+100"},
+        BadValue{"CenterHuge", sphere("center = [-1e200, 0, 0]"), "case.toml:3:10: body[0].center:", "magnitude at most 1e+100"},
+        BadValue{"RadiusHuge", sphere("radius = 1e101"), "case.toml:3:10: body[0].radius:", "expected a number in (0, 1e+100]"},
+        BadValue{"PlanePointHuge", BOX + "[[obstacle]]\npoint = [0, 0, 1e300]\n", "case.toml:4:9: obstacle[0].point:", "magnitude at most 1e+100"},
         BadValue{"CellsTwoEntries", body("cells = [1, 1]"), "case.toml:3:9: body[0].cells:", "expected an array of 3 integers"},
         BadValue{"BoxMinNotBelowMax", body("min = [0, 1, 0]\nmax = [1, 1, 1]"), "case.toml:4:7: body[0].max:", "expected max > min in every component, found max[1] = 1 and min[1] = 1"},
         BadValue{"BoxMinAboveDefaultMax", body("min = [2, 0, 0]"), "case.toml:3:7: body[0].min:", "max[0] = 1 and min[0] = 2"},
-        BadValue{"RadiusZero", sphere("radius = 0"), "case.toml:3:10: body[0].radius:", "> 0"},
+        BadValue{"RadiusZero", sphere("radius = 0"), "case.toml:3:10: body[0].radius:", "in (0, 1e+100], found the integer 0"},
         BadValue{"ResolutionOne", sphere("resolution = 1"), "case.toml:3:14: body[0].resolution:", "expected an integer >= 2, found the integer 1"},
         BadValue{"FixedMinAboveMax", body("[[body.fixed]]\nmin = [0, 0, 0]\nmax = [1, -1, 1]"), "case.toml:5:7: body[0].fixed[0].max:", "expected max >= min"},
         BadValue{"LoadForceNan", body("[[body.load]]\nforce = [0, 0, nan]"), "case.toml:4:16: body[0].load[0].force[2]:", "finite"},
         BadValue{"PlaneNormalZero", BOX + "[[obstacle]]\nnormal = [0, 0, 0]\n", "case.toml:4:10: obstacle[0].normal:", "expected a nonzero vector"},
         BadValue{"BodyNameInvalid", body("name = \"a,b\""), "case.toml:3:8: body[0].name:", "letters, digits"},
+        BadValue{"BodyNameTooLong", body("name = \"" + std::string(200, 'b') + "\""), "case.toml:3:8: body[0].name:", "1 to 128 letters, digits, '_', '.' and '-', found the string \"bbb"},
         BadValue{"MeshEmpty", "[[body]]\nmesh = \"\"\n", "case.toml:2:8: body[0].mesh:", "empty"}),
     [](const ::testing::TestParamInfo<BadValue>& param_info) { return param_info.param.name; });
 
@@ -654,6 +667,39 @@ TEST(ReadCase, DuplicateBodyNamesNameBothLines)
     EXPECT_THAT([] { parse("[[body]]\nname = \"body1\"\nshape = \"box\"\n" + BOX); },
                 ThrowsMessage<coro::InputError>(AllOf(StartsWith("case.toml:4:1: body[1].name:"),
                                                       HasSubstr("default name"), HasSubstr("case.toml:2:8"))));
+}
+
+TEST(ReadCase, LargestGeneratedMeshesThatAnIndexNumbersAreAccepted)
+{
+    // 6 · 710³ = 2147466000 tets, 17483 below the limit; 711 is refused (above).
+    EXPECT_EQ(parse("[[body]]\nshape = \"sphere\"\nresolution = 710\n").bodies[0].resolution, 710);
+    EXPECT_EQ(parse(BOX + "cells = [357913941, 1, 1]\n").bodies[0].cells[0], 357913941); // 6 · that ≤ 2^31 − 1
+    EXPECT_THAT([] { parse(BOX + "cells = [357913942, 1, 1]\n"); },
+                ThrowsMessage<coro::InputError>(HasSubstr("makes 2147483652 tets")));
+}
+
+TEST(ReadCase, ABodyMayNotTakeTheNameOfAnotherOutputBlock)
+{
+    const std::string obstacle = "[[obstacle]]\ntype = \"mesh\"\nmesh = \"ramp.obj\"\n";
+    EXPECT_THAT([&] { parse("[[body]]\nname = \"obstacle0\"\nshape = \"box\"\n" + obstacle); },
+                ThrowsMessage<coro::InputError>(
+                    AllOf(StartsWith("case.toml:2:8: body[0].name: expected a name that no other block of the output "
+                                     "has, found \"obstacle0\""),
+                          HasSubstr("the block name of mesh obstacle 0 ([[obstacle]] at case.toml:4)"))));
+    // obstacle1 is free with one mesh obstacle; a plane is no mesh obstacle, but has its block.
+    EXPECT_EQ(parse("[[body]]\nname = \"obstacle1\"\nshape = \"box\"\n[[obstacle]]\n" + obstacle).bodies[0].name,
+              "obstacle1");
+    EXPECT_THAT([&] { parse("[[body]]\nname = \"plane0\"\nshape = \"box\"\n[[obstacle]]\n" + obstacle); },
+                ThrowsMessage<coro::InputError>(HasSubstr("the block name of plane obstacle 0 ([[obstacle]] at case.toml:4)")));
+    EXPECT_THAT([] { parse("[[body]]\nname = \"b_surface\"\nshape = \"box\"\n"
+                           "[[body]]\nname = \"b\"\nshape = \"box\"\nsurface = \"fine.obj\"\n"); },
+                ThrowsMessage<coro::InputError>(
+                    AllOf(StartsWith("case.toml:2:8: body[0].name:"),
+                          HasSubstr("the block name of the embedded surface of body 'b' (case.toml:7:1)"))));
+    // Without a surface, "b_surface" names no other block.
+    EXPECT_EQ(parse("[[body]]\nname = \"b_surface\"\nshape = \"box\"\n[[body]]\nname = \"b\"\nshape = \"box\"\n")
+                  .bodies.size(),
+              2u);
 }
 
 TEST(ReadCase, CaseFileStemMustBeAValidNameUnlessNamed)

@@ -301,7 +301,8 @@ TEST(WriteMsh22, RejectsUnwritablePath)
 {
     const fs::path path = write_msh("x.msh", "").parent_path() / "no_such_dir" / "out.msh";
     EXPECT_THAT([&] { write_msh22(path, test::unit_tet()); },
-                input_error_about(path, "cannot open for writing"));
+                ThrowsMessage<OutputError>(AllOf(StartsWith(path.string() + ": cannot create out.msh.tmp"),
+                                                 HasSubstr("(No such file or directory)"))));
 }
 
 // ---------------------------------------------------------------------------------------------

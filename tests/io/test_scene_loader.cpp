@@ -1,8 +1,10 @@
-// Loading a case into bodies: warnings for surfaces contact cannot trust as closed.
+// Loading a case into bodies: warnings for surfaces contact cannot trust as closed; values,
+// sizes and embedded surfaces refused before they make a run meaningless.
 
 #include <corocontact/io/scene_loader.hpp>
 
 #include <corocontact/core/error.hpp>
+#include <corocontact/core/primitives.hpp>
 #include <corocontact/io/case_reader.hpp>
 #include <corocontact/io/mesh_readers.hpp>
 
@@ -22,6 +24,7 @@ using ::testing::AllOf;
 using ::testing::Contains;
 using ::testing::HasSubstr;
 using ::testing::IsEmpty;
+using ::testing::StartsWith;
 using ::testing::ThrowsMessage;
 
 const fs::path& scratch()
@@ -101,6 +104,123 @@ TEST(LoadScene, WarnsWhenAnEmbeddedSurfaceIsOpen)
     EXPECT_THAT(loaded.warnings,
                 Contains(AllOf(HasSubstr("body 'b': surface"), HasSubstr("patch.obj"),
                                HasSubstr("(3 open, 0 non-manifold, 0 misoriented edges)"))));
+}
+
+const std::string BLOCK = "[[body]]\nname = \"block\"\nshape = \"box\"\nmin = [0.0, 0.0, 0.0]\nmax = [1.0, 1.0, 1.0]\n";
+
+TEST(LoadScene, RefusesValuesWhoseProductsOverflowDouble)
+{
+    EXPECT_THAT([] { load("young.toml", BLOCK + "young = 1e300\n"); },
+                ThrowsMessage<InputError>(
+                    AllOf(StartsWith(scratch().string() + "/young.toml:1: body 'block': the element stiffness (λ + 2μ) "
+                                                           "× edge is about 1.3e+300, expected between 1e-140 and 1e+140"),
+                          HasSubstr("young = 1e+300"))));
+    EXPECT_THAT([] { load("gravity.toml", "[simulation]\ngravity = [0.0, -1e300, 0.0]\n" + BLOCK); },
+                ThrowsMessage<InputError>(AllOf(HasSubstr("dt × the weight of a node (mass × gravity) is about 4.2e+299"),
+                                                HasSubstr("|simulation.gravity| = 1e+300"))));
+    EXPECT_THAT([] { load("stiff.toml", "[contact]\nenabled = true\nstiffness = 1e200\n" + BLOCK); },
+                ThrowsMessage<InputError>(HasSubstr("the contact force at a depth of one edge (stiffness × edge) is "
+                                                    "about 1e+200")));
+    EXPECT_THAT([] { load("load.toml", BLOCK + "[[body.load]]\nforce = [1e150, 0.0, 0.0]\n"); },
+                ThrowsMessage<InputError>(HasSubstr("dt × a load's total force is about 1e+148")));
+    // Large but representable: accepted.
+    EXPECT_EQ(load("young_ok.toml", BLOCK + "young = 1e120\n").scene.bodies.size(), 1u);
+}
+
+TEST(LoadScene, RefusesValuesWhoseProductsVanishInDouble)
+{
+    EXPECT_THAT([] { load("density.toml", BLOCK + "density = 1e-300\n"); },
+                ThrowsMessage<InputError>(HasSubstr("body 'block': the node mass (density × volume / 4) is about 4.2e-302")));
+    EXPECT_THAT([] { load("dt.toml", "[simulation]\ndt = 1e-300\n" + BLOCK); },
+                ThrowsMessage<InputError>(
+                    AllOf(HasSubstr("dt² × the element stiffness is about 1.3e-595"), HasSubstr("simulation.dt = 1e-300"))));
+    EXPECT_THAT([] { load("velocity.toml", BLOCK + "velocity = [1e-200, 0.0, 0.0]\n"); },
+                ThrowsMessage<InputError>(HasSubstr("the initial momentum of a node (mass × velocity) is about 4.2e-199")));
+    // A static analysis has no dt: a tiny dt there is unused, not refused.
+    EXPECT_EQ(load("static.toml", "[simulation]\nanalysis = \"static\"\ndt = 1e-300\n" + BLOCK +
+                                      "[[body.fixed]]\nmax = [0.0, 1e9, 1e9]\n")
+                  .scene.bodies.size(),
+              1u);
+}
+
+TEST(LoadScene, RefusesABodySoFarFromTheOriginThatStrainsAreRoundingNoise)
+{
+    EXPECT_THAT([] { load("far.toml", BLOCK + "translate = [0.0, 2e10, 0.0]\n"); },
+                ThrowsMessage<InputError>(HasSubstr("body 'block': node coordinates reach 2e+10 while the shortest edge is 1")));
+    EXPECT_EQ(load("near.toml", BLOCK + "translate = [0.0, 5e9, 0.0]\n").scene.bodies.size(), 1u);
+}
+
+TEST(LoadScene, RefusesASceneThatCannotFitInMemoryBeforeMakingIt)
+{
+    // 1.8e9 tets: about 1 TB at the estimate's 600 bytes per tet. Refused at once, before a
+    // single node is generated (this test would otherwise run out of memory).
+    EXPECT_THAT([] { load("huge.toml", BLOCK + "cells = [1000, 1000, 300]\n"); },
+                ThrowsMessage<InputError>(AllOf(HasSubstr("body 'block': cells = [1000, 1000, 300]: the scene would have "
+                                                          "1800000000 tets, which need about 1080.0 GB of memory"),
+                                                HasSubstr("more than the"))));
+}
+
+TEST(LoadScene, RefusesAnEmbeddedSurfaceFarOutsideItsTets)
+{
+    test::write_text(scratch() / "far.obj", "v 5 5 5\nv 6 5 5\nv 5 6 5\nv 5 5 6\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n");
+    EXPECT_THAT([] { load("far_surface.toml", BLOCK + "surface = \"far.obj\"\n"); },
+                ThrowsMessage<InputError>(AllOf(HasSubstr("body 'block': surface"),
+                                                HasSubstr("far.obj: vertex 0 (counted from 0 in file order) lies 6.9282 "
+                                                          "outside the bounding box of the body's tets"))));
+    // Inside the bounding box of a body of two boxes 10 apart, but 4 away from either.
+    TetMesh two = make_box(Vec3::Zero(), Vec3::Ones(), {1, 1, 1});
+    const TetMesh right = make_box(Vec3(10, 0, 0), Vec3(11, 1, 1), {1, 1, 1});
+    const Index n = two.num_vertices();
+    two.rest_positions.conservativeResize(2 * n, 3);
+    two.rest_positions.bottomRows(n) = right.rest_positions;
+    two.tets.conservativeResize(2 * two.num_tets(), 4);
+    two.tets.bottomRows(right.num_tets()) = right.tets.array() + n;
+    write_msh22(scratch() / "two_boxes.msh", two);
+    test::write_text(scratch() / "gap.obj", "v 0.2 0.2 0.2\nv 0.8 0.2 0.2\nv 0.2 0.8 0.2\nv 5 0.5 0.5\n"
+                                            "f 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n");
+    EXPECT_THAT([] { load("gap.toml", "[[body]]\nname = \"two\"\nmesh = \"two_boxes.msh\"\nsurface = \"gap.obj\"\n"); },
+                ThrowsMessage<InputError>(AllOf(HasSubstr("gap.obj: vertex 3 (counted from 0 in file order) lies 4 "
+                                                          "outside the body's tets, 231% of the longest edge"),
+                                                HasSubstr("expected the surface on or inside the body"))));
+}
+
+TEST(LoadScene, WarnsAboutAnEmbeddedSurfaceALittleOutsideItsTets)
+{
+    // The top vertex is 0.5 above the unit box, 29% of the longest edge (the cell diagonal, √3)
+    // of the tet it is bound to: more than a fine surface over coarse tets shows (≤ 15%).
+    test::write_text(scratch() / "near.obj",
+                     "v 0.2 0.2 0.2\nv 0.8 0.2 0.2\nv 0.2 0.8 0.2\nv 0.3 0.3 1.5\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n");
+    const LoadedScene loaded = load("near_surface.toml", BLOCK + "surface = \"near.obj\"\n");
+    EXPECT_THAT(loaded.warnings, Contains(AllOf(HasSubstr("near.obj: vertex 3"), HasSubstr("lies 0.5 outside"),
+                                                HasSubstr("(1 of 4 vertices lie outside)"))));
+    test::write_text(scratch() / "inside.obj",
+                     "v 0.2 0.2 0.2\nv 0.8 0.2 0.2\nv 0.2 0.8 0.2\nv 0.3 0.3 0.9\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n");
+    EXPECT_THAT(load("inside_surface.toml", BLOCK + "surface = \"inside.obj\"\n").warnings, IsEmpty());
+}
+
+TEST(LoadScene, WarnsWhenALoadFallsOnFixedNodes)
+{
+    // The load box x >= 1 holds the 4 nodes of the box's right face; the fixed box x >= 1, y <= 0
+    // two of them: half of the 8 N is lost.
+    const std::string right_face = "[[body.load]]\nmin = [1.0, -1.0, -1.0]\nmax = [2.0, 2.0, 2.0]\nforce = [0.0, -8.0, 0.0]\n";
+    const LoadedScene loaded =
+        load("lost.toml", BLOCK + "[[body.fixed]]\nmin = [1.0, -1.0, -1.0]\nmax = [2.0, 0.0, 2.0]\n" + right_face);
+    EXPECT_THAT(loaded.warnings,
+                Contains(HasSubstr("body 'block': 4 of the 8 N of its [[body.load]] forces fall on fixed nodes")));
+    EXPECT_THAT(load("kept.toml", BLOCK + "[[body.fixed]]\nmax = [0.0, 2.0, 2.0]\n" + right_face).warnings, IsEmpty());
+}
+
+TEST(LoadScene, RefusesABodyThatStartsBehindAPlane)
+{
+    const std::string plane = "[[obstacle]]\ntype = \"plane\"\npoint = [0.0, 3.0, 0.0]\n";
+    EXPECT_THAT([&] { load("behind.toml", "[contact]\nenabled = true\n" + BLOCK + plane); },
+                ThrowsMessage<InputError>(AllOf(HasSubstr("behind.toml:8: plane obstacle: body 'block'"),
+                                                HasSubstr("lies entirely behind the plane, 2 to 3 behind it"))));
+    // Touching the plane (the top face on it) is a start, not a mistake.
+    EXPECT_EQ(load("touching.toml", "[contact]\nenabled = true\n" + BLOCK +
+                                        "[[obstacle]]\ntype = \"plane\"\npoint = [0.0, 1.0, 0.0]\n")
+                  .scene.planes.size(),
+              1u);
 }
 
 } // namespace

@@ -510,7 +510,8 @@ TEST(WriteSurface, RejectsUnwritablePath)
 {
     const fs::path path = scratch() / "no_such_dir" / "out.obj";
     EXPECT_THAT([&] { write_obj(path, box_surface()); },
-                input_error_about(path, "cannot open for writing"));
+                ThrowsMessage<OutputError>(AllOf(StartsWith(path.string() + ": cannot create out.obj.tmp"),
+                                                 HasSubstr("(No such file or directory)"))));
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -36,6 +36,7 @@
 #include <vector>
 
 namespace fs = std::filesystem;
+using ::testing::AllOf;
 using ::testing::HasSubstr;
 using ::testing::ThrowsMessage;
 
@@ -306,16 +307,16 @@ TEST(VtkSeriesWriter, KeepsBlockNamesButWritesSafeUniqueFileNames)
     }
 }
 
-TEST(VtkSeriesWriter, ThrowsInputErrorWhenTheDirectoryIsARegularFile)
+TEST(VtkSeriesWriter, ThrowsOutputErrorWhenTheDirectoryIsARegularFile)
 {
     const fs::path file = test::write_text(test::scratch_dir("vtk_dir_is_file") / "out", "x");
     EXPECT_THAT([&] { VtkSeriesWriter(file, "run"); },
-                ThrowsMessage<InputError>(HasSubstr(file.string())));
+                ThrowsMessage<OutputError>(HasSubstr(file.string())));
     EXPECT_THAT([&] { VtkSeriesWriter(file / "sub", "run"); },
-                ThrowsMessage<InputError>(HasSubstr((file / "sub").string())));
+                ThrowsMessage<OutputError>(AllOf(HasSubstr((file / "sub").string()), HasSubstr("(Not a directory)"))));
 }
 
-TEST(VtkSeriesWriter, ThrowsInputErrorNamingTheFileVtkCannotWrite)
+TEST(VtkSeriesWriter, ThrowsOutputErrorNamingTheFileVtkCannotWrite)
 {
     const fs::path dir = test::scratch_dir("vtk_write_fails");
     VtkSeriesWriter writer(dir, "run");
@@ -324,7 +325,7 @@ TEST(VtkSeriesWriter, ThrowsInputErrorNamingTheFileVtkCannotWrite)
     const fs::path target = dir / "run_000001" / "solid_body.vtu";
     fs::create_directories(fs::path(target).concat(".tmp"));
     EXPECT_THAT([&] { writer.write_frame(1, 0.1, make_scene(1)); },
-                ThrowsMessage<InputError>(HasSubstr(target.string())));
+                ThrowsMessage<OutputError>(HasSubstr(target.string())));
     EXPECT_FALSE(fs::exists(target));
     EXPECT_FALSE(fs::exists(dir / "run_000001.vtm"));
     EXPECT_EQ(writer.num_frames(), 1U);
@@ -333,21 +334,48 @@ TEST(VtkSeriesWriter, ThrowsInputErrorNamingTheFileVtkCannotWrite)
     // A frame directory that cannot be created.
     test::write_text(dir / "run_000002", "not a directory");
     EXPECT_THAT([&] { writer.write_frame(2, 0.2, make_scene(2)); },
-                ThrowsMessage<InputError>(HasSubstr((dir / "run_000002").string())));
+                ThrowsMessage<OutputError>(HasSubstr((dir / "run_000002").string())));
     EXPECT_EQ(read_pvd(writer.pvd_path()).size(), 1U);
 
-    // A .pvd that cannot be rewritten: the frame's files are complete, but the writer does
-    // not count a frame the .pvd does not list.
+    // A .pvd that cannot be rewritten: the writer does not count a frame the .pvd does not
+    // list, and removes the files of that frame again.
     fs::create_directories(dir / "run.pvd.tmp");
     EXPECT_THAT([&] { writer.write_frame(3, 0.3, make_scene(3)); },
-                ThrowsMessage<InputError>(HasSubstr((dir / "run.pvd").string())));
+                ThrowsMessage<OutputError>(AllOf(HasSubstr((dir / "run.pvd").string()), HasSubstr("(Is a directory)"))));
     EXPECT_EQ(writer.num_frames(), 1U);
     EXPECT_EQ(read_pvd(writer.pvd_path()).size(), 1U);
+    EXPECT_FALSE(fs::exists(dir / "run_000003.vtm"));
+    EXPECT_FALSE(fs::exists(dir / "run_000003"));
     fs::remove(dir / "run.pvd.tmp");
     writer.write_frame(4, 0.4, make_scene(4));
     EXPECT_EQ(writer.num_frames(), 2U);
     ASSERT_EQ(read_pvd(writer.pvd_path()).size(), 2U);
     EXPECT_EQ(read_pvd(writer.pvd_path())[1].file, "run_000004.vtm");
+}
+
+TEST(VtkSeriesWriter, ANewFrameThatFailsHalfwayLeavesNoneOfItsFiles)
+{
+    const fs::path dir = test::scratch_dir("vtk_half_frame");
+    VtkSeriesWriter writer(dir, "run");
+    writer.write_frame(0, 0.0, make_scene(0));
+    // The second block's file cannot be written (the first one's can): a file where the
+    // frame's folder wants the second block's temporary.
+    const std::vector<FrameBlock> blocks = make_scene(1);
+    ASSERT_EQ(blocks.size(), 2U);
+    fs::create_directories(dir / "run_000001");
+    fs::create_directories(dir / "run_000001" / "floor_plane__1_____co_.vtu.tmp");
+    EXPECT_THROW(writer.write_frame(1, 0.1, blocks), OutputError);
+    EXPECT_FALSE(fs::exists(dir / "run_000001" / "solid_body.vtu")) << "the finished first block stays";
+    EXPECT_FALSE(fs::exists(dir / "run_000001.vtm"));
+    EXPECT_TRUE(fs::exists(dir / "run_000001")) << "a folder the writer did not make is not removed";
+    EXPECT_EQ(read_pvd(writer.pvd_path()).size(), 1U);
+
+    // The same in a folder the writer makes itself: the folder goes too.
+    fs::remove_all(dir / "run_000001");
+    fs::create_directories(dir / "run_000002.vtm.tmp"); // the .vtm cannot be written
+    EXPECT_THROW(writer.write_frame(2, 0.2, blocks), OutputError);
+    EXPECT_FALSE(fs::exists(dir / "run_000002"));
+    EXPECT_EQ(read_pvd(writer.pvd_path()).size(), 1U);
 }
 
 TEST(VtkSeriesWriter, ReplacesFilesByRenameNeverInPlace)

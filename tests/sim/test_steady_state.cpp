@@ -10,6 +10,7 @@
 #include <gtest/gtest.h>
 
 #include <string>
+#include <vector>
 
 using namespace coro;
 
@@ -103,4 +104,13 @@ TEST(SteadyState, TimeStepsWithoutContactAllocateNothing)
     for (int step = 0; step < 10; ++step)
         simulation.step();
     EXPECT_EQ(counter.count(), 0u);
+}
+
+TEST(SteadyState, TheCounterSeesAnAllocation)
+{
+    std::vector<double> grown;
+    test::AllocationCounter counter;
+    ASSERT_TRUE(counter.active());
+    grown.resize(1000);
+    EXPECT_GE(counter.count(), 1u);
 }

@@ -94,6 +94,7 @@ struct TiedPair {
     TiedPair()
     {
         scene.set_node_positions({&left.positions, &right.positions});
+        scene.set_components({0, 0}); // tied: one component
         std::vector<std::pair<Index, Index>> ties;
         for (Index i = 0; i < left.mesh.num_vertices(); ++i) {
             if (std::abs(left.mesh.rest_positions(i, 0) - 8.0) > 1e-9)

@@ -41,9 +41,11 @@ struct Bodies {
     BsrMatrix c = random_spd_upper(3, 3, {});
 };
 
-// Symmetric coupling between random rows, with repeated blocks: (r, c) and (c, r) = ᵀ.
+// Symmetric coupling between random rows, with repeated blocks: (r, c) and (c, r) = ᵀ; all
+// bodies in one component.
 void random_coupling(SceneMatrix& scene, unsigned seed, Index pairs)
 {
+    scene.set_components(std::vector<Index>(static_cast<std::size_t>(scene.num_bodies()), 0));
     std::mt19937 rng(seed);
     std::uniform_real_distribution<double> u(-0.5, 0.5);
     CouplingBlocks& coupling = scene.coupling();
@@ -213,4 +215,81 @@ TEST(SceneMatrix, ProductsAndSolvesAreBitwiseTheSameForAnyThreadCount)
     EXPECT_EQ(dots_one, dots_two);
     EXPECT_TRUE(x_one == x_two);
     EXPECT_EQ(one.residual, two.residual);
+}
+
+TEST(SceneMatrix, ComponentsAreNumberedByTheirFirstBody)
+{
+    Bodies bodies;
+    SceneMatrix scene({&bodies.a, &bodies.b, &bodies.c});
+    EXPECT_EQ(scene.num_components(), 3);
+    scene.set_components({0, 1, 0});
+    EXPECT_EQ(scene.num_components(), 2);
+    EXPECT_EQ(scene.chunk_component(0), 0);
+    EXPECT_EQ(scene.chunk_component(3), 1);
+    EXPECT_EQ(scene.chunk_component(5), 0);
+    EXPECT_THROW(scene.set_components({1, 0, 0}), std::invalid_argument);
+    EXPECT_THROW(scene.set_components({0, 2, 1}), std::invalid_argument);
+    EXPECT_THROW(scene.set_components({0, 0}), std::invalid_argument);
+}
+
+TEST(PcgSolver, EachComponentIteratesAsItsOwnSolveWould)
+{
+    // Body a alone, and bodies b and c coupled: the scene solve of the two components gives, bit
+    // for bit, the solves of each component alone, and stops each at its own tolerance.
+    Bodies bodies;
+    const auto coupled = [&](SceneMatrix& scene, Index b_offset) {
+        CouplingBlocks& coupling = scene.coupling();
+        coupling.reset(4);
+        const Block3 block = Block3::Constant(0.3);
+        coupling.entry(0) = {b_offset + 7, b_offset + 50, block};
+        coupling.entry(1) = {b_offset + 50, b_offset + 7, Block3(block.transpose())};
+        coupling.entry(2) = {b_offset + 2, b_offset + 51, Block3(-block)};
+        coupling.entry(3) = {b_offset + 51, b_offset + 2, Block3(-block.transpose())};
+        coupling.finish(scene.chunks());
+    };
+    SceneMatrix scene({&bodies.a, &bodies.b, &bodies.c});
+    scene.set_components({0, 1, 1});
+    coupled(scene, 30);
+    SceneMatrix alone_a({&bodies.a});
+    SceneMatrix alone_bc({&bodies.b, &bodies.c});
+    alone_bc.set_components({0, 0});
+    coupled(alone_bc, 0);
+
+    // Body a starts close to its solution, so it needs fewer iterations than b and c.
+    VecX rhs = VecX::LinSpaced(scene.num_dofs(), -1.0, 2.0);
+    VecX x = VecX::Zero(scene.num_dofs());
+    const VecX near_a = VecX::LinSpaced(90, 0.5, 1.0);
+    VecX a_times(90);
+    bodies.a.multiply(near_a, a_times);
+    rhs.head(90) = a_times + VecX::Constant(90, 1e-7);
+    x.head(90) = near_a;
+    PcgSettings settings;
+    settings.tolerance = 1e-9;
+    settings.max_iterations = 200;
+    VecX x_a = x.head(90), x_bc = VecX::Zero(scene.num_dofs() - 90);
+    const PcgResult whole = PcgSolver().solve(scene, rhs, x, settings);
+    const PcgResult a = PcgSolver().solve(alone_a, rhs.head(90), x_a, settings);
+    const PcgResult bc = PcgSolver().solve(alone_bc, rhs.tail(scene.num_dofs() - 90), x_bc, settings);
+    EXPECT_TRUE(x.head(90) == x_a);
+    EXPECT_TRUE(x.tail(scene.num_dofs() - 90) == x_bc);
+    EXPECT_NE(a.iterations, bc.iterations);
+    EXPECT_EQ(whole.iterations, std::max(a.iterations, bc.iterations));
+    EXPECT_EQ(whole.residual, std::max(a.residual, bc.residual));
+    EXPECT_TRUE(whole.converged);
+}
+
+TEST(PcgSolver, AComponentWithZeroRightHandSideGetsZero)
+{
+    Bodies bodies;
+    SceneMatrix scene({&bodies.a, &bodies.b});
+    VecX rhs = VecX::Ones(scene.num_dofs());
+    rhs.head(90).setZero();
+    VecX x = VecX::Ones(scene.num_dofs());
+    PcgSettings settings;
+    settings.tolerance = 1e-10;
+    settings.max_iterations = 300;
+    const PcgResult result = PcgSolver().solve(scene, rhs, x, settings);
+    EXPECT_TRUE(result.converged);
+    EXPECT_TRUE(x.head(90).isZero(0.0));
+    EXPECT_GT(x.tail(150).norm(), 0.0);
 }

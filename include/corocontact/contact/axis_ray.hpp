@@ -64,70 +64,52 @@ struct AxisRayTolerances {
 AxisOutcome axis_test(const ContactSurface& surface, const Vec3& point, int axis, DetectionMode mode,
                       const std::vector<Index>& candidate_faces, const AxisRayTolerances& tolerances);
 
+/// What decided an inside test.
+enum class DecidedBy {
+    NOTHING,        ///< paper mode: no axis line met a candidate face (the point is not inside)
+    X_AXIS,         ///< the x axis: its closest crossing, or (exact modes) no crossing at all or
+                    ///< the point on the surface
+    Y_AXIS,         ///< the y axis, as X_AXIS
+    Z_AXIS,         ///< the z axis, as X_AXIS
+    WINDING_NUMBER, ///< the generalized winding number: a surface that is not closed, or (exact
+                    ///< modes) three axes that did not decide
+};
+
+/// The axis (0, 1, 2) of DecidedBy::X_AXIS, Y_AXIS, Z_AXIS; −1 for the others.
+constexpr int axis_of(DecidedBy by)
+{
+    return by == DecidedBy::X_AXIS ? 0 : by == DecidedBy::Y_AXIS ? 1 : by == DecidedBy::Z_AXIS ? 2 : -1;
+}
+
+/// DecidedBy of axis 0, 1 or 2.
+constexpr DecidedBy decided_by_axis(int axis)
+{
+    return axis == 0 ? DecidedBy::X_AXIS : axis == 1 ? DecidedBy::Y_AXIS : DecidedBy::Z_AXIS;
+}
+
 /// Result of the full test of one vertex (axes x, then y, then z; then winding number in
 /// exact mode).
 struct InsideTest {
     bool inside = false;
-    /// 0..2, or 3 for the winding-number fallback, −1: no axis hit; DECIDED_BY_NEIGHBOUR: the
-    /// answer of another point joined to it by segments that meet no face (inside_tests_shared():
-    /// an empty cube or AabbTree::segment_clear)
-    int deciding_axis = -1;
-    bool on_surface = false;       ///< exact modes: the point lies on the surface (then not inside)
+    bool on_surface = false; ///< exact modes: the point lies on the surface (then not inside)
+    DecidedBy decided_by = DecidedBy::NOTHING;
     /// Exact modes, decided by an axis: the distance along that axis to the closest clean face
     /// crossing plus its rounding bound, so some point of the surface lies within it (an upper
-    /// bound on the depth, used to start the nearest-point search); +∞ otherwise.
+    /// bound on the depth, which starts the nearest-point search); +∞ otherwise.
     double surface_distance_bound = std::numeric_limits<double>::infinity();
     /// Exact modes, decided by an axis: the face of that closest clean crossing (−1 otherwise).
     Index crossing_face = -1;
 };
 
-/// InsideTest::deciding_axis of a point that took a neighbour's answer (inside_tests_shared();
-/// the detector's clear-edge groups count theirs in DetectionStats::by_neighbour).
-constexpr int DECIDED_BY_NEIGHBOUR = 4;
-
 /// Paper mode: axes x, y, z until one has a hit (INSIDE or OUTSIDE); no hit on all three ⇒
-/// outside (deciding_axis −1).
+/// not inside (DecidedBy::NOTHING).
 /// Exact modes: axes x, y, z; INSIDE, OUTSIDE or ON_SURFACE decide (a point on the surface is
 /// reported as not inside, `on_surface` set); NO_HIT also decides outside (a line through an
 /// inside point of a closed surface always meets it); DEGENERATE tries the next axis; three
-/// degenerate axes fall back to the generalized winding number (w > 0.5, deciding_axis 3).
-/// A surface that is not closed is tested by the winding number alone (deciding_axis 3).
+/// degenerate axes fall back to the generalized winding number (w > 0.5).
+/// A surface that is not closed is tested by the winding number alone.
 /// @param[in] candidate_faces  paper mode: faces of `surface` with at least one vertex in I
 InsideTest inside_test(const ContactSurface& surface, const Vec3& point, DetectionMode mode,
                        const std::vector<Index>& candidate_faces, const AxisRayTolerances& tolerances);
-
-/// inside_test() of `count` points against the same surface, results[i] for points[i], equal to
-/// inside_test() field for field. In exact mode, for a closed surface, the x axes of up to
-/// AabbTree::AXIS_PACKET consecutive points are tested in one tree walk
-/// (AabbTree::faces_on_axis_lines), which pays when the points are close together (e.g. in the
-/// order of AabbTree::vertices_in_box); the points x does not decide continue alone.
-/// @param[in]  points   `count` points
-/// @param[out] results  `count` results
-void inside_tests(const ContactSurface& surface, const Vec3* points, Index count, DetectionMode mode,
-                  const std::vector<Index>& candidate_faces, const AxisRayTolerances& tolerances,
-                  InsideTest* results);
-
-/// inside_tests() in exact mode for points that come close together (e.g. a block of
-/// AabbTree::vertices_in_box), sharing the work between neighbours: a point joined to an earlier
-/// one by a segment that meets no face of the surface takes that point's answer. Walking the
-/// points in order, a point takes the answer of
-///  - the centre of an earlier empty cube that holds it (AabbTree::empty_cube: a box that no face
-///    box meets, so every point of it is joined to its centre without crossing the surface);
-///  - else the previous point, when its own empty cube (walked for when it would reach the
-///    previous point or one of the next ones) holds that point, or AabbTree::segment_clear shows
-///    that the segment between them meets no face;
-///  - else it is tested (inside_tests(), in packets).
-/// For a closed surface the answers equal inside_test()'s: `inside` everywhere, and every field
-/// for the tested points.
-/// A point that took a neighbour's answer gets deciding_axis DECIDED_BY_NEIGHBOUR, on_surface
-/// false (it lies off the surface), the neighbour's crossing_face and, as surface_distance_bound,
-/// the neighbour's plus their distance (some point of the surface lies within it).
-/// Another mode, or a surface that is not closed: inside_tests() as it is.
-/// @param[in]  points   `count` points
-/// @param[out] results  `count` results
-/// @return the number of points that took a neighbour's answer
-Index inside_tests_shared(const ContactSurface& surface, const Vec3* points, Index count, DetectionMode mode,
-                          const std::vector<Index>& candidate_faces, const AxisRayTolerances& tolerances,
-                          InsideTest* results);
 
 } // namespace coro

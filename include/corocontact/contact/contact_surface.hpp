@@ -1,6 +1,7 @@
 #pragma once
 /// @file contact_surface.hpp
-/// @brief What contact detection sees of a body: a closed triangle surface and its tree.
+/// @brief What contact detection sees of a body: a closed triangle surface, its tree and its
+/// edges.
 
 #include <corocontact/contact/aabb_tree.hpp>
 #include <corocontact/core/types.hpp>
@@ -10,6 +11,24 @@
 #include <vector>
 
 namespace coro {
+
+/// The edges of a triangle surface, each listed from both its ends: the edges of vertex v are
+/// k in [start[v], start[v + 1]), to vertex `vertex[k]`, held by the faces `faces[k]` (the same
+/// face twice on a boundary edge; two of them where more than two faces share an edge). A
+/// vertex's edges are ordered by the vertex at their other end.
+struct SurfaceEdges {
+    std::vector<Index> start;                  ///< #V + 1
+    std::vector<Index> vertex;                 ///< 2 × #edges
+    std::vector<std::array<Index, 2>> faces;   ///< 2 × #edges
+    /// The same faces by their places in the surface's tree (the order of its leaves, in which
+    /// neighbouring faces lie close in memory): what the detector's grouping reads. Filled by
+    /// ContactSurface when it builds its tree; empty from surface_edges().
+    std::vector<std::array<Index, 2>> tree_slots;
+};
+
+/// The edges of `faces` (#F×3 into #V = num_vertices vertices); a face with a repeated vertex
+/// has no edge between the repeats.
+SurfaceEdges surface_edges(const Tris& faces, Index num_vertices);
 
 /// The contact surface of one body (or one static obstacle mesh).
 struct ContactSurface {
@@ -25,9 +44,11 @@ struct ContactSurface {
     std::vector<Eigen::Vector4d> embed_weights;
     bool closed = true;           ///< closed and consistently oriented (else: winding number only)
     AabbTree tree;                ///< over faces; build() once, refit() after vertices move
+    SurfaceEdges edges;           ///< of faces
 
     /// Builds a surface from a subset of a body's nodes: `faces` index the body's nodes,
-    /// are compacted to the vertices they use (ascending node index) and the tree is built.
+    /// are compacted to the vertices they use (ascending node index), and the tree and the
+    /// edges are built.
     static ContactSurface from_body(std::string name, CRef<Positions> body_positions, const Tris& faces);
 
     /// A surface whose vertices follow body nodes through barycentric weights (see

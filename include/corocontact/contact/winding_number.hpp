@@ -3,7 +3,7 @@
 /// @brief Generalized winding number of a closed (or open) triangle surface at a point
 /// (Jacobson et al. 2013): the sum of the signed solid angles of the faces over 4π.
 
-#include <corocontact/contact/aabb_tree.hpp>
+#include <corocontact/core/types.hpp>
 
 namespace coro {
 

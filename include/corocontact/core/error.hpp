@@ -20,6 +20,14 @@ public:
     using std::runtime_error::runtime_error;
 };
 
+/// The output could not be written (disk full, no permission, the output folder in use by
+/// another run): the command line maps it to exit code 4. The message names the path and the
+/// system's reason.
+class OutputError : public std::runtime_error {
+public:
+    using std::runtime_error::runtime_error;
+};
+
 /// A numerical failure (NaN, Inf, an inverted element): in a time loop it means divergence
 /// and maps to exit code 3.
 class NumericalError : public std::runtime_error {

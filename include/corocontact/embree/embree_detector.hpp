@@ -56,11 +56,12 @@ std::vector<ContactPoint> detect_contacts_embree(const std::vector<ContactSurfac
                                                  const EmbreeScenes& scenes, const DetectionSettings& settings,
                                                  DetectionStats* stats = nullptr);
 
-/// Vertices on which Embree and the axis-ray detector disagree about inside/outside.
+/// Vertices on which Embree and the axis-ray detector disagree about inside/outside (of the
+/// detectors' output: every point's other is a surface).
 struct Disagreement {
     Index body = -1;
     Index vertex = -1;
-    Index other = -1;
+    Index other = -1; ///< the surface
     bool axis_ray_inside = false;
     bool embree_inside = false;
 };
@@ -68,8 +69,8 @@ std::vector<Disagreement> cross_check(const std::vector<ContactPoint>& axis_ray,
                                       const std::vector<ContactPoint>& embree);
 
 /// Vertices both found inside whose nearest face or depth differ (Embree's point queries and
-/// the tree's search must give the same, bit for bit). Both lists sorted by (body, vertex,
-/// other), as the detectors return them.
+/// the tree's search must give the same, bit for bit). Both lists sorted by contact_order(), as
+/// the detectors return them.
 Index depth_disagreements(const std::vector<ContactPoint>& axis_ray, const std::vector<ContactPoint>& embree);
 
 } // namespace coro

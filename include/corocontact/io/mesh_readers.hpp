@@ -44,8 +44,9 @@ TetMesh read_vtk_mesh(const std::filesystem::path& path);
 ///         malformed or truncated file, a node index out of range, a repeated node in a tet
 TetMesh read_tetgen(const std::filesystem::path& path);
 
-/// Writes a mesh as Gmsh MSH 2.2 ASCII (node tags 1..#V, tet elements of type 4).
-/// @throws InputError if the file cannot be written
+/// Writes a mesh as Gmsh MSH 2.2 ASCII (node tags 1..#V, tet elements of type 4), whole or not
+/// at all (core/atomic_file.hpp).
+/// @throws OutputError naming the file and the system's reason if it cannot be written
 void write_msh22(const std::filesystem::path& path, const TetMesh& mesh);
 
 } // namespace coro

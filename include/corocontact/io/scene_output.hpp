@@ -33,8 +33,4 @@ struct SummaryContext {
 /// peak_rss_mb, plus solves, solves_not_converged and static_not_converged).
 std::string summary_json(const RunSummary& summary, const SummaryContext& context);
 
-/// Writes `text` to `path` through a temporary file and a rename.
-/// @throws InputError naming the file if it cannot be written
-void write_file_atomically(const std::filesystem::path& path, const std::string& text);
-
 } // namespace coro

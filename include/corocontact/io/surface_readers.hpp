@@ -42,14 +42,14 @@ SurfaceMesh read_surface(const std::filesystem::path& path);
 /// back to the same double, `f` lines with 1-based indices).
 /// @param[in] path     file to create or overwrite
 /// @param[in] surface  vertices #V×3, faces #F×3 with indices in [0, #V)
-/// @throws InputError if the file cannot be written
+/// @throws OutputError if the file cannot be written (core/atomic_file.hpp: whole or not at all)
 void write_obj(const std::filesystem::path& path, const SurfaceMesh& surface);
 
 /// Writes a surface as OFF (`OFF`, `#V #F 0`, vertices with the shortest round-trip
 /// representation, faces `3 i j k` with 0-based indices).
 /// @param[in] path     file to create or overwrite
 /// @param[in] surface  vertices #V×3, faces #F×3 with indices in [0, #V)
-/// @throws InputError if the file cannot be written
+/// @throws OutputError if the file cannot be written (core/atomic_file.hpp: whole or not at all)
 void write_off(const std::filesystem::path& path, const SurfaceMesh& surface);
 
 /// Writes a surface as STL, one facet per face with its unit normal ((x1−x0)×(x2−x0)
@@ -59,8 +59,8 @@ void write_off(const std::filesystem::path& path, const SurfaceMesh& surface);
 /// @param[in] binary   true: binary STL (80-byte header that does not start with "solid",
 ///                     coordinates rounded to float); false: ASCII STL with the shortest
 ///                     round-trip representation of each double (exact)
-/// @throws InputError if the file cannot be written, or (binary) a coordinate is beyond the
-///         range of float
+/// @throws OutputError if the file cannot be written (core/atomic_file.hpp: whole or not at
+///         all); InputError if (binary) a coordinate is beyond the range of float
 void write_stl(const std::filesystem::path& path, const SurfaceMesh& surface, bool binary);
 
 } // namespace coro

@@ -37,14 +37,17 @@ struct FrameBlock {
 class VtkSeriesWriter {
 public:
     /// Creates `dir` if needed; removes nothing.
-    /// @throws InputError if the directory cannot be created
+    /// @throws InputError for a name that is not a plain file name
+    /// @throws OutputError if the folder cannot be created (the path and the system's reason)
     VtkSeriesWriter(std::filesystem::path dir, std::string name);
 
     /// Writes one frame and appends it to the .pvd.
     /// @param[in] step    step number used in the file names (zero-padded to 6 digits)
     /// @param[in] time    simulated time [s] written to the .pvd
     /// @param[in] blocks  the frame's blocks, written in this order
-    /// @throws InputError if a file cannot be written (names the file)
+    /// @throws OutputError if a file cannot be written (the path and the system's reason); the
+    ///         files of a new frame written before the failure are removed again, the .pvd
+    ///         still lists the earlier frames
     void write_frame(Index step, double time, const std::vector<FrameBlock>& blocks);
 
     /// Lists a frame that an earlier run wrote into the same directory (a restart continues
@@ -53,6 +56,11 @@ public:
     /// @param[in] time  its simulated time [s]
     /// @throws InputError if `dir/NAME_<step>.vtm` does not exist
     void adopt_frame(Index step, double time);
+
+    /// Writes the .pvd listing the frames so far: write_frame does it after every frame; after
+    /// adopt_frame it lists an earlier run's frames before the first new one is written.
+    /// @throws OutputError if the file cannot be written
+    void write_pvd() const;
 
     /// Path of the .pvd collection.
     std::filesystem::path pvd_path() const;
@@ -64,7 +72,9 @@ private:
         double time;
         std::string vtm; // relative to m_dir
     };
-    void write_pvd() const;
+    /// Writes the blocks and the .vtm of one frame; appends each finished file to `written`.
+    void write_frame_files(const std::string& stem, const std::vector<FrameBlock>& blocks,
+                           std::vector<std::filesystem::path>& written) const;
 
     std::filesystem::path m_dir;
     std::string m_name;

@@ -34,6 +34,12 @@ public:
     const TetMesh& mesh() const { return m_mesh; }
     /// Input (file) index of internal node v.
     Index input_node(Index v) const { return m_fem.layout().new_to_old_node[static_cast<std::size_t>(v)]; }
+    /// Per-node values (#3V, internal order, e.g. positions()) as #V×3 rows in input order.
+    Positions to_input_order(const VecX& node_values) const;
+    /// The inverse of to_input_order: #V×3 rows in input order to #3V values in internal order.
+    VecX from_input_order(CRef<Positions> rows) const;
+    /// The tets in input order, numbered by input node, #T×4.
+    Tets input_tets() const;
     /// Input (file) index of internal tet t.
     Index input_tet(Index t) const { return m_fem.layout().new_to_old_tet[static_cast<std::size_t>(t)]; }
     /// METIS part of internal tet t.
@@ -59,6 +65,11 @@ public:
     Index num_fixed() const { return m_num_fixed; }
     /// Marks node `v` fixed (it keeps its current position).
     void fix_vertex(Index v);
+    /// Replaces every node's flag: nodes fixed from now on keep their current position and get
+    /// velocity 0 (as at construction); released nodes move freely from the next step.
+    /// @param[in] fixed  #V flags in internal order, non-zero for a node held in place
+    /// @throws InputError if fixed.size() is not #V
+    void set_fixed(const std::vector<char>& fixed);
     /// Constant external nodal forces from the box loads, #3V [N] (gravity is added by solvers).
     const VecX& load_forces() const { return m_load_forces; }
     VecX& load_forces() { return m_load_forces; }

@@ -16,7 +16,7 @@
 /// the body table (name, #V, #T, METIS parts), step, counters, frames, then per body positions
 /// and velocities in mesh file node order (#V×3 doubles each) and rotations in mesh file tet
 /// order (#T×9 doubles, column-major), then "END!" and a u64 FNV-1a checksum of all bytes
-/// before it. Written to a temporary name and renamed.
+/// before it. Written through core/atomic_file.hpp (temporary name, fsync, rename).
 
 #include <corocontact/sim/simulation.hpp>
 
@@ -46,7 +46,8 @@ struct CheckpointState {
 std::uint64_t case_fingerprint(const CaseSpec& spec);
 
 /// Saves the scene's state and `state` to `path` (temporary file + rename).
-/// @throws InputError naming the file if it cannot be written
+/// @throws OutputError naming the file and the system's reason if it cannot be written (no
+///         temporary is left)
 void write_checkpoint(const std::filesystem::path& path, const Scene& scene, const CheckpointState& state,
                       std::uint64_t fingerprint);
 

@@ -36,7 +36,7 @@ public:
     /// have held a step's contacts).
     /// @param[in] bodies    the scene's bodies (velocities and fixed nodes are read)
     /// @param[in] surfaces  surfaces of the bodies (same order), then of static obstacles
-    /// @param[in] contacts  detection output; other < 0 marks a plane obstacle (see plane_obstacle.hpp)
+    /// @param[in] contacts  detection output (surfaces and plane obstacles, see ContactTarget)
     /// @param[in] dt        the step h [s]
     /// @param[in,out] matrix  the scene matrix whose coupling() is refilled and finished;
     ///                        blocks in rows or columns of fixed nodes are left out

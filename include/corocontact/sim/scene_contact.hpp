@@ -30,6 +30,15 @@ std::vector<ContactSurface> make_scene_surfaces(const Scene& scene);
 /// its tree; obstacle surfaces stay where they are.
 void update_contact_surfaces(const std::vector<Body>& bodies, std::vector<ContactSurface>& surfaces);
 
+/// The components of the scene system (SceneMatrix::set_components): bodies joined, directly or
+/// through others, by overlapping boxes (the broad phase of detection, so every contact lies
+/// within a component), numbered in the order of their first body.
+/// @param[in] surfaces    the bodies' contact surfaces first (their trees refit), then obstacles
+/// @param[in] num_bodies  how many of the surfaces are bodies
+/// @param[out] component_of_body  #num_bodies
+void contact_components(const std::vector<ContactSurface>& surfaces, Index num_bodies,
+                        std::vector<Index>& component_of_body);
+
 /// Detection settings from the case's [contact] table.
 DetectionSettings detection_settings(const ContactSettings& contact);
 

@@ -116,6 +116,13 @@ public:
     /// @throws NumericalError prefixed with "step N (t = ...): " when the simulation diverges
     void step();
 
+    /// Recomputes the contact response of the current state (the forces and coupling blocks the
+    /// next step uses) from the current velocities, fixed nodes and contact settings: for a
+    /// caller that changed them between steps. Detection is not repeated (positions have not
+    /// moved); counters are not changed. Does nothing where contact does not apply
+    /// (run_notes.hpp contact_applies).
+    void update_contact_response();
+
     /// Steps done, those before a restart included.
     Index steps_done() const { return m_step; }
     /// Simulated time after steps_done() [s], or the load factor (static).
@@ -140,6 +147,8 @@ private:
     std::unique_ptr<EmbreeCheck> m_embree; // cross-check scenes, when asked for
     SceneSystem m_system;                  // the scene-wide implicit Euler step
     ContactResponse m_response;            // of the last detection, used by the next step
+    std::vector<Index> m_components;       // contact_components() of the last detection
+    DetectionScratch m_detection;          // detect_contacts' working memory, kept from step to step
     DivergenceCheck m_divergence;          // run after every step
     Index m_step = 0;                      // steps done
     RunSummary m_totals;                   // counters so far; *_mean fields hold sums

@@ -6,8 +6,6 @@
 #include <corocontact/solver/bsr_matrix.hpp>
 #include <corocontact/solver/row_chunks.hpp>
 
-#include <cstdint>
-#include <utility>
 #include <vector>
 
 namespace coro {
@@ -31,8 +29,13 @@ public:
 
     /// Sorts the contributions by (row, column), sums repeated blocks in contribution order (so
     /// the result depends only on that order), and indexes them by the chunks' rows. Must be
-    /// called after the entries are written and before any other query.
-    void finish(const RowChunks& chunks);
+    /// called after the entries are written and before any other query. Takes O(#contributions
+    /// + #rows): a counting sort by row, then the few blocks of a row by column.
+    /// @param[in] column_order  null, or for every column index the key by which the blocks of a
+    ///                          row are ordered (a process of a distributed run numbers its
+    ///                          columns locally but orders them as one process numbers them;
+    ///                          the order decides the bits of a row's product)
+    void finish(const RowChunks& chunks, const std::vector<Index>* column_order = nullptr);
 
     /// Distinct blocks after finish(), sorted by (row, column).
     Index size() const { return m_size; }
@@ -47,8 +50,9 @@ public:
 
 private:
     std::vector<Entry> m_entries;
-    std::vector<Entry> m_sorted;                              // finish()'s output buffer
-    std::vector<std::pair<std::uint64_t, Index>> m_keys;      // ((row, column), contribution)
+    std::vector<Entry> m_sorted;      // finish()'s output buffer
+    std::vector<Index> m_row_offsets; // finish(): contributions per row, #rows+1
+    std::vector<Index> m_order;       // finish(): contributions sorted by (row, column, order)
     std::vector<Index> m_chunk_offsets{0, 0};
     Index m_size = 0;
 };

@@ -19,20 +19,33 @@ struct PcgSettings {
     AmgSettings amg;               ///< preconditioner = AMG: its knobs (read when it is made)
 };
 
-/// Outcome of a solve; non-convergence is data, not an error.
+/// Outcome of a solve; non-convergence is data, not an error. For a scene of several
+/// components (SceneMatrix::num_components) it is that of the slowest component.
 struct PcgResult {
-    bool converged = false;
-    Index iterations = 0;
-    double residual = 0.0;         ///< ‖b − Ax‖/‖b‖ at exit (0 when b = 0)
+    bool converged = false;        ///< every component reached the tolerance
+    Index iterations = 0;          ///< iterations of the component that ran longest
+    double residual = 0.0;         ///< the largest ‖b_k − A_k x_k‖/‖b_k‖ of a component k (0 for b_k = 0)
 };
 
 /// A reusable PCG solver: keeps its work vectors and the preconditioner between solves.
+///
+/// The scene matrix is block diagonal by component (bodies that contact may join), and each
+/// component gets a recurrence of its own — its own α, β and stopping test, exactly the PCG of
+/// that component alone — run side by side in the same scene-wide parallel passes. A
+/// component stops when its residual falls below tolerance·‖b_k‖ or at the cap, and its chunks
+/// are skipped from then on: a pile's resting bodies do not iterate as long as a colliding stack.
+///
 /// Each iteration makes three parallel passes over the scene's row chunks: q = A p with the
 /// chunks' partial pᵀq; x, r and z = M⁻¹r updated together with the partial r·r and r·z; p = z
-/// + βp. A global preconditioner (AMG) is applied between the update of r and the partial sums,
-/// which then take a pass of their own. Every dot product adds the chunk partials in chunk
-/// order, so the iterates are bitwise the same for any thread count (AMG: see
-/// amg_preconditioner.hpp). Once its vectors have the scene's size, a solve allocates nothing.
+/// + βp. A component's dot products add its chunk partials in chunk order, so the iterates are
+/// bitwise the same for any thread count (AMG: see amg_preconditioner.hpp). Once its vectors
+/// have the scene's size, a solve allocates nothing.
+///
+/// A chunk-local preconditioner (Jacobi, block-Jacobi) runs inside the pass over the active
+/// chunks. A global one (AMG) is applied to the whole vector between the update of r and the
+/// partial sums, which then take a pass of their own: it is block diagonal by component like the
+/// matrix (its aggregates follow the matrix's couplings), so each component's z depends only on
+/// its own r, and the z it writes on the chunks of stopped components is never read.
 class PcgSolver {
 public:
     PcgSolver() = default;
@@ -44,7 +57,8 @@ public:
     ~PcgSolver() = default;
 
     /// Solves A x = b for symmetric positive definite A, warm-started from the given x.
-    /// @param[in] a       the scene matrix, #N×#N blocks, SPD (its coupling finished)
+    /// @param[in] a       the scene matrix, #N×#N blocks, SPD (its coupling finished, every
+    ///                    coupling block within a component)
     /// @param[in] b       #3N right-hand side
     /// @param[in,out] x   #3N initial guess on entry, solution on exit
     /// @throws NumericalError if a non-finite value appears (A not SPD, NaN in b)
@@ -58,24 +72,38 @@ public:
     PreconditionerTimes preconditioner_times() const;
 
 private:
-    struct Sums {
-        double rr = 0.0; ///< r·r
-        double rz = 0.0; ///< r·z
+    /// The recurrence of one component.
+    struct Component {
+        double b_norm = 0.0;
+        double r_norm = 0.0;
+        double initial_r_norm = 0.0; ///< ‖r‖ of the warm start
+        double rz = 0.0;     ///< r·z of the current iterate
+        double alpha = 0.0;
+        double beta = 0.0;
+        Index iterations = 0;
+        bool active = false; ///< still iterating
     };
     /// The preconditioner of the settings' kind, prepared for `a`: the one kept from earlier
     /// solves when it is of this kind, else a new one.
     void prepare_preconditioner(const SceneMatrix& a, const PcgSettings& settings);
-    /// One fused pass over the nodes: either r = b − r (r holding A x) when `b` is given, or
-    /// x += αp, r −= αq; then z = M⁻¹ r, and r·r, r·z summed per chunk, then in chunk order.
-    Sums residual_pass(const RowChunks& chunks, const double* b, double alpha, double* x);
-    /// Σ_c chunk_dots[c] in chunk order.
-    double sum_chunks(const std::vector<double>& chunk_dots) const;
+    /// One fused pass over the active chunks: either r = b − r (r holding A x) when `b` is
+    /// given, or x += α_k p, r −= α_k q; then z = M⁻¹ r, and r·r, r·z per chunk.
+    void residual_pass(const SceneMatrix& a, const double* b, double* x);
+    /// p = z + β_k p over the active chunks.
+    void direction_pass(const SceneMatrix& a);
+    /// totals[k·width + j] = Σ partials[c·width + j] over the chunks c of component k, in chunk
+    /// order (inactive components included only when `all`).
+    void sum_by_component(const SceneMatrix& a, const std::vector<double>& partials, int width, bool all);
+    /// The chunk flags of the active components.
+    void mark_active_chunks(const SceneMatrix& a);
 
     PcgPreconditioner m_kind = PcgPreconditioner::JACOBI;
     std::unique_ptr<Preconditioner> m_preconditioner; // of m_kind; null before the first solve
     VecX m_r, m_z, m_p, m_q;
-    std::vector<double> m_chunk_dots;     // one partial per chunk
-    std::vector<Sums> m_chunk_sums;       // one pair of partials per chunk
+    std::vector<Component> m_components;
+    std::vector<char> m_chunk_active;     // one flag per chunk
+    std::vector<double> m_partials;       // per chunk, up to two values
+    std::vector<double> m_totals;         // per component, up to two values
 };
 
 } // namespace coro

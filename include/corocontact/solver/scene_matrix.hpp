@@ -7,6 +7,10 @@
 /// are the product chunks of the body matrices in body order (a small body is one chunk, a
 /// large body its METIS parts and interface pieces), so every reduction over the scene sums
 /// per-body partials in a fixed order: results never depend on the thread count.
+///
+/// The bodies fall into components: sets of bodies that coupling blocks may join (bodies whose
+/// boxes overlap). The matrix is block diagonal by component, so the scene PCG runs one
+/// recurrence per component, each stopping when its own residual is small enough.
 
 #include <corocontact/solver/bsr_matrix.hpp>
 #include <corocontact/solver/coupling_blocks.hpp>
@@ -51,6 +55,14 @@ public:
     {
         return m_positions.empty() ? nullptr : m_positions[static_cast<std::size_t>(body)];
     }
+    /// Components: component_of_body[b] for every body, numbered 0, 1, … in the order of each
+    /// component's first body. Every coupling block must join bodies of one component.
+    /// @throws std::invalid_argument if the numbering is not of that form
+    void set_components(const std::vector<Index>& component_of_body);
+    /// Number of components (initially one per body).
+    Index num_components() const { return m_num_components; }
+    /// The component of chunk c.
+    Index chunk_component(Index chunk) const { return m_chunk_component[static_cast<std::size_t>(chunk)]; }
 
     /// The contact coupling blocks (scene rows); call coupling().finish(chunks()) after filling.
     CouplingBlocks& coupling() { return m_coupling; }
@@ -61,7 +73,10 @@ public:
     /// @param[in] x            #3N scene DOFs
     /// @param[out] y           #3N (must not alias x)
     /// @param[out] chunk_dots  #chunks, or null when no dot product is wanted
-    void multiply(const double* x, double* y, double* chunk_dots) const;
+    /// @param[in] active       #chunks flags, or null for all: the rows (and dots) of chunks
+    ///                         whose flag is 0 are skipped (left as they were); chunks of one
+    ///                         component must share their flag
+    void multiply(const double* x, double* y, double* chunk_dots, const char* active = nullptr) const;
 
     /// The diagonal blocks A_rr of the rows of chunk c (body block plus coupling).
     /// @param[out] out  one Block3 per row of the chunk
@@ -75,6 +90,8 @@ private:
     std::vector<Index> m_chunk_body;    // #chunks
     std::vector<Index> m_chunk_local;   // #chunks: the chunk's index within its body matrix
     bool m_any_gathers = false;         // some body has blocks reaching across its chunks
+    Index m_num_components = 0;
+    std::vector<Index> m_chunk_component; // #chunks
     CouplingBlocks m_coupling;
 };
 

@@ -529,8 +529,8 @@ InsideTest EmbreeSceneSet::inside_test(const ContactSurface& surface, Index s, c
                         std::numeric_limits<double>::infinity()};
     InsideTest result = inside_from_axes(
         surface, point, [&](int axis) { return axis_test(s, point, axis, counts, &bounds[axis]); });
-    if (result.inside && result.deciding_axis >= 0 && result.deciding_axis < 3)
-        result.surface_distance_bound = bounds[result.deciding_axis];
+    if (result.inside && axis_of(result.decided_by) >= 0)
+        result.surface_distance_bound = bounds[axis_of(result.decided_by)];
     return result;
 }
 
@@ -541,7 +541,7 @@ struct NearestQuery {
     const ContactSurface* surface;
     Vec3 point;
     double best_d2;  ///< squared distance of the best face, or the initial bound
-    AabbTree::Nearest best;
+    NearestPoint best;
     double band;     ///< added to the query radius: Embree's float boxes and query point
 };
 
@@ -577,7 +577,7 @@ bool nearest_face(RTCPointQueryFunctionArguments* args)
 
 } // namespace
 
-AabbTree::Nearest EmbreeSceneSet::nearest(const ContactSurface& surface, Index s, const Vec3& point,
+NearestPoint EmbreeSceneSet::nearest(const ContactSurface& surface, Index s, const Vec3& point,
                                           double distance_bound) const
 {
     CORO_ASSERT(s >= 0 && s < size());

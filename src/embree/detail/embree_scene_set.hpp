@@ -34,7 +34,7 @@ struct EmbreeQueryCounts {
 /// (coro::inside_test): axes x, y, z in order; INSIDE or OUTSIDE decide; ON_SURFACE decides
 /// "not inside" with `on_surface` set; NO_HIT decides outside (a line through an inside point
 /// of a closed surface always meets it); DEGENERATE tries the next axis; three degenerate axes
-/// fall back to the generalized winding number (w > 0.5, deciding_axis 3). A surface that is
+/// fall back to the generalized winding number (w > 0.5, DecidedBy::WINDING_NUMBER). A surface that is
 /// not closed is tested by the winding number alone.
 /// @param[in] axis_test  callable `AxisOutcome(int axis)`
 template <class AxisTest>
@@ -50,14 +50,14 @@ InsideTest inside_from_axes(const ContactSurface& surface, const Vec3& point, co
         case AxisOutcome::ON_SURFACE:
             result.inside = outcome == AxisOutcome::INSIDE;
             result.on_surface = outcome == AxisOutcome::ON_SURFACE;
-            result.deciding_axis = axis;
+            result.decided_by = decided_by_axis(axis);
             return result;
         case AxisOutcome::DEGENERATE:
             break;
         }
     }
     result.inside = winding_number(surface.vertices, surface.faces, point) > 0.5;
-    result.deciding_axis = 3;
+    result.decided_by = DecidedBy::WINDING_NUMBER;
     return result;
 }
 
@@ -126,7 +126,7 @@ public:
     /// `s` was built from, and the scene updated to its current vertices (Embree's boxes decide
     /// which faces are measured: stale ones give a wrong face without notice).
     /// @param[in] distance_bound  a distance within which the surface lies from `point` (+∞: none)
-    AabbTree::Nearest nearest(const ContactSurface& surface, Index s, const Vec3& point, double distance_bound) const;
+    NearestPoint nearest(const ContactSurface& surface, Index s, const Vec3& point, double distance_bound) const;
 
     /// One plain first-hit ray (no filter) from `point` along +axis: the benchmark's first-hit
     /// ray rate and the test of Embree's normal convention.

@@ -50,6 +50,17 @@ write("msh_empty.msh", "")
 write("msh_duplicate_node_tag.msh", V22 + "$Nodes\n3\n1 0 0 0\n2 1 0 0\n1 0 1 0\n$EndNodes\n")
 write("msh_three_node_tet.msh", msh22(NODES4, ["1 4 2 0 1 1 2 3"]))
 
+# A tet listed twice, as Gmsh's MSH 2 writes a volume that belongs to two physical groups.
+write("msh_duplicate_tet.msh", msh22("$Nodes\n5\n1 0 0 0\n2 1 0 0\n3 0 1 0\n4 0 0 1\n5 1 1 1\n$EndNodes\n",
+                                     ["1 4 2 1 1 1 2 3 4", "2 4 2 1 1 2 3 4 5", "3 4 2 2 1 1 2 4 3"]))
+# Two tets on the same side of their shared face (the second folds back over the first).
+write("msh_overlapping_tets.msh", msh22("$Nodes\n5\n1 0 0 0\n2 1 0 0\n3 0 1 0\n4 0 0 1\n5 0.2 0.2 0.2\n$EndNodes\n",
+                                        ["1 4 2 0 1 1 2 3 4", "2 4 2 0 1 1 2 3 5"]))
+write("msh_huge_coordinate.msh", msh22("$Nodes\n4\n1 0 0 0\n2 1e300 0 0\n3 0 1e300 0\n4 0 0 1e300\n$EndNodes\n",
+                                       ["1 4 2 0 1 1 2 3 4"]))
+write("msh_tiny.msh", msh22("$Nodes\n4\n1 0 0 0\n2 1e-120 0 0\n3 0 1e-120 0\n4 0 0 1e-120\n$EndNodes\n",
+                            ["1 4 2 0 1 1 2 3 4"]))
+
 # --- Gmsh MSH, binary ----------------------------------------------------------------------
 bin22 = read("msh/cube_v22_bin.msh")
 write("msh22_bin_truncated.msh", bin22[: len(bin22) // 2])
@@ -83,6 +94,8 @@ write("vtu_count_too_large.vtu", vtu_ascii.replace(b'NumberOfPoints="76"', b'Num
 legacy = read("vtk/cube_gmsh.vtk")
 write("vtk_truncated.vtk", legacy[: len(legacy) // 2])
 write("vtk_polydata.vtk", "# vtk DataFile Version 2.0\np\nASCII\nDATASET POLYDATA\nPOINTS 3 float\n0 0 0 1 0 0 0 1 0\n")
+write("vtk_duplicate_tet.vtk", "# vtk DataFile Version 2.0\ntwice\nASCII\nDATASET UNSTRUCTURED_GRID\nPOINTS 4 double\n"
+      "0 0 0 1 0 0 0 1 0 0 0 1\nCELLS 2 10\n4 0 1 2 3\n4 3 2 1 0\nCELL_TYPES 2\n10\n10\n")
 write("vtk_no_tets.vtk", "# vtk DataFile Version 2.0\ntri\nASCII\nDATASET UNSTRUCTURED_GRID\nPOINTS 3 double\n"
       "0 0 0 1 0 0 0 1 0\nCELLS 1 4\n3 0 1 2\nCELL_TYPES 1\n5\n")
 
@@ -116,6 +129,40 @@ write("case_obj_index_zero.toml", SIM + BODY + "surface = \"obj_index_zero.obj\"
 write("case_off_truncated.toml", SIM + BODY + "\n[[obstacle]]\ntype = \"mesh\"\nmesh = \"off_truncated.off\"\n")
 write("case_empty_fixed_box.toml", SIM + BODY + "[[body.fixed]]\nmin = [5.0, 5.0, 5.0]\nmax = [6.0, 6.0, 6.0]\n")
 write("case_inverted_box.toml", SIM + BODY.replace("max = [1.0, 1.0, 1.0]", "max = [-1.0, 1.0, 1.0]"))
+
+# Values whose products leave the range of double, and sizes beyond what can be numbered or held.
+write("case_young_huge.toml", SIM + BODY + "young = 1e300\n")
+write("case_density_tiny.toml", SIM + BODY + "density = 1e-300\n")
+write("case_dt_tiny.toml", "[simulation]\ndt = 1e-300\nsteps = 2\n\n" + BODY)
+write("case_gravity_huge.toml", "[simulation]\ndt = 0.01\nsteps = 2\ngravity = [0.0, -1e300, 0.0]\n\n" + BODY)
+write("case_contact_stiffness_huge.toml", SIM + "[contact]\nenabled = true\nstiffness = 1e300\n\n" + BODY)
+write("case_far_from_origin.toml", SIM + BODY + "translate = [1e12, 0.0, 0.0]\n")
+write("case_translate_huge.toml", SIM + BODY + "translate = [1e300, 0.0, 0.0]\n")
+write("case_tolerance_one.toml", SIM + "[solver]\ntolerance = 1.0\n\n" + BODY)
+write("case_parts_per_thread.toml", SIM + "[solver]\nparts_per_thread = 2147483647\n\n" + BODY)
+write("case_cells_overflow.toml", SIM + BODY + "cells = [2000, 2000, 2000]\n")
+write("case_cells_memory.toml", SIM + BODY + "cells = [1000, 1000, 300]\n")
+write("case_sphere_overflow.toml", SIM + "[[body]]\nname = \"ball\"\nshape = \"sphere\"\nresolution = 100000\n")
+write("case_mesh_duplicate_tet.toml", SIM + "[[body]]\nname = \"twice\"\nmesh = \"msh_duplicate_tet.msh\"\n")
+# Output names: too long, or taken by another block of the frame.
+write("case_name_too_long.toml", SIM + BODY.replace('"block"', '"' + "b" * 129 + '"'))
+write("case_name_obstacle.toml", SIM + BODY.replace('"block"', '"obstacle0"') +
+      "\n[[obstacle]]\ntype = \"mesh\"\nmesh = \"surface_cube.obj\"\n")
+write("case_name_surface.toml", SIM + BODY + "surface = \"surface_cube.obj\"\n\n" +
+      BODY.replace('"block"', '"block_surface"').replace("0.0, 0.0, 0.0", "2.0, 0.0, 0.0")
+      .replace("1.0, 1.0, 1.0", "3.0, 1.0, 1.0"))
+# An embedded surface far from its body's tets; a body that starts behind a plane.
+write("case_surface_far.toml", SIM + BODY + "surface = \"surface_far.obj\"\n")
+write("case_plane_behind.toml", SIM + "[contact]\nenabled = true\n\n" + BODY +
+      "\n[[obstacle]]\ntype = \"plane\"\npoint = [0.0, 2.0, 0.0]\nnormal = [0.0, 1.0, 0.0]\n")
+write("case_plane_point_huge.toml", SIM + BODY + "\n[[obstacle]]\ntype = \"plane\"\npoint = [0.0, -1e200, 0.0]\n")
+CUBE_OBJ = ("v {0} {0} {0}\nv {1} {0} {0}\nv {1} {1} {0}\nv {0} {1} {0}\nv {0} {0} {1}\nv {1} {0} {1}\nv {1} {1} {1}\n"
+            "v {0} {1} {1}\nf 1 4 3\nf 1 3 2\nf 5 6 7\nf 5 7 8\nf 1 2 6\nf 1 6 5\nf 2 3 7\nf 2 7 6\nf 3 4 8\n"
+            "f 3 8 7\nf 4 1 5\nf 4 5 8\n")
+write("surface_cube.obj", CUBE_OBJ.format(0.1, 0.9))
+write("surface_far.obj", CUBE_OBJ.format(10.1, 10.9))
+write("surface_huge.obj", CUBE_OBJ.format(2.0, 1e300))
+write("case_obstacle_huge.toml", SIM + BODY + "\n[[obstacle]]\ntype = \"mesh\"\nmesh = \"surface_huge.obj\"\n")
 
 # A directory where a mesh or case file is expected (git keeps them through a README).
 for folder in ("folder.msh", "folder.toml"):

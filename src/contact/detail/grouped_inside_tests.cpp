@@ -1,0 +1,116 @@
+#include "grouped_inside_tests.hpp"
+
+#include "inside_tests.hpp"
+#include "tree_access.hpp"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <corocontact/core/error.hpp>
+
+#include <algorithm>
+#include <functional>
+#include <tuple>
+
+namespace coro::detail {
+
+namespace {
+
+// Tested vertices per task.
+constexpr std::size_t TEST_BLOCK = 256;
+
+} // namespace
+
+std::vector<SlotPairs> overlapping_slot_pairs(const std::vector<ContactSurface>& surfaces,
+                                              const std::vector<std::pair<Index, Index>>& pairs)
+{
+    std::vector<SlotPairs> slot_pairs(pairs.size());
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, pairs.size(), 1), [&](const tbb::blocked_range<std::size_t>& r) {
+        for (std::size_t j = r.begin(); j < r.end(); ++j) {
+            const ContactSurface& a = surfaces[static_cast<std::size_t>(pairs[j].first)];
+            const ContactSurface& b = surfaces[static_cast<std::size_t>(pairs[j].second)];
+            if (a.closed || b.closed)
+                overlapping_slots(a.tree, b.tree, a.tree.bounds().intersection(b.tree.bounds()), slot_pairs[j]);
+        }
+    });
+    return slot_pairs;
+}
+
+void grouped_inside_tests(const std::vector<ContactSurface>& surfaces, const std::vector<PairCandidates>& candidates,
+                          const std::vector<SlotPairs>& slot_pairs, const AxisRayTolerances& tolerances,
+                          bool distance_bounds, tbb::enumerable_thread_specific<GroupScratch>& scratch,
+                          const std::function<void(std::size_t pair, const GroupedAnswers& answers)>& use)
+{
+    const std::size_t pairs = candidates.size();
+    // The face pairs of each k: candidates holds (a, b) and (b, a), ordered by (body, other), so
+    // those with body < other come in the order of their pairs; the other direction takes the
+    // slot pairs of its reverse, columns swapped.
+    std::vector<std::size_t> pair_of(pairs);
+    std::size_t lower = 0;
+    for (std::size_t k = 0; k < pairs; ++k)
+        if (candidates[k].body < candidates[k].other)
+            pair_of[k] = lower++;
+    CORO_ASSERT(lower == slot_pairs.size());
+    for (std::size_t k = 0; k < pairs; ++k) {
+        const PairCandidates& pair = candidates[k];
+        if (pair.body < pair.other)
+            continue;
+        const auto reverse = std::lower_bound(candidates.begin(), candidates.end(), pair,
+                                              [](const PairCandidates& x, const PairCandidates& y) {
+                                                  return std::tie(x.body, x.other) < std::tie(y.other, y.body);
+                                              });
+        CORO_ASSERT(reverse != candidates.end() && reverse->body == pair.other && reverse->other == pair.body);
+        pair_of[k] = pair_of[static_cast<std::size_t>(reverse - candidates.begin())];
+    }
+    // Per pair, in one task: the groups, the tests of their first vertices (blocks of them as
+    // nested tasks when there are many) and their use, where the rest of each group take them.
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, pairs, 1), [&](const tbb::blocked_range<std::size_t>& r) {
+        GroupedAnswers answers;
+        std::vector<Index>& group = answers.group;
+        std::vector<Index>& tested = answers.tested;
+        std::vector<InsideTest>& answer = answers.answer;
+        for (std::size_t k = r.begin(); k < r.end(); ++k) {
+            const PairCandidates& pair = candidates[k];
+            const ContactSurface& body = surfaces[static_cast<std::size_t>(pair.body)];
+            const ContactSurface& other = surfaces[static_cast<std::size_t>(pair.other)];
+            const std::size_t n = pair.vertices.size();
+            if (other.closed) {
+                clear_edge_groups(body, other, slot_pairs[pair_of[k]],
+                                  pair.body < pair.other ? PairColumn::FIRST : PairColumn::SECOND, pair.vertices,
+                                  scratch.local(), group, tested, distance_bounds ? &answers.path : nullptr);
+            } else {
+                group.resize(n);
+                for (std::size_t i = 0; i < n; ++i)
+                    group[i] = static_cast<Index>(i);
+                tested = group;
+                if (distance_bounds)
+                    answers.path.assign(n, 0.0);
+            }
+
+            answer.resize(tested.size());
+            const auto test_block = [&](std::size_t first, std::size_t last) {
+                Vec3 points[TEST_BLOCK];
+                const auto count = static_cast<Index>(last - first);
+                for (Index t = 0; t < count; ++t) {
+                    const Index i = tested[first + static_cast<std::size_t>(t)];
+                    points[t] = body.vertices.row(pair.vertices[static_cast<std::size_t>(i)]).transpose();
+                }
+                inside_tests(other, points, count, DetectionMode::EXACT, {}, tolerances, answer.data() + first);
+            };
+            if (tested.size() <= TEST_BLOCK) {
+                test_block(0, tested.size());
+            } else {
+                const std::size_t blocks = (tested.size() + TEST_BLOCK - 1) / TEST_BLOCK;
+                tbb::parallel_for(tbb::blocked_range<std::size_t>(0, blocks, 1),
+                                  [&](const tbb::blocked_range<std::size_t>& b) {
+                                      for (std::size_t j = b.begin(); j < b.end(); ++j)
+                                          test_block(j * TEST_BLOCK, std::min(tested.size(), (j + 1) * TEST_BLOCK));
+                                  });
+            }
+
+            use(k, answers);
+        }
+    });
+}
+
+} // namespace coro::detail

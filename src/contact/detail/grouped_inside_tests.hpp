@@ -1,0 +1,56 @@
+#pragma once
+/// @file grouped_inside_tests.hpp
+/// @brief Exact inside tests of the candidate vertices of every pair, one test per group of
+/// vertices joined by clear edges.
+
+#include <corocontact/contact/detector.hpp>
+
+#include "clear_edge_groups.hpp"
+
+#include <tbb/enumerable_thread_specific.h>
+
+#include <functional>
+#include <utility>
+#include <vector>
+
+namespace coro::detail {
+
+/// The exact-mode answers of one pair's candidates, by groups: candidate i belongs to group
+/// group[i], whose first candidate tested[group[i]] was tested, with answer answer[group[i]].
+/// With distance bounds, path[i] is the length of a path of clear edges from candidate
+/// tested[group[i]] to candidate i [m] (0 for a tested one).
+struct GroupedAnswers {
+    std::vector<Index> group;       ///< size n (the pair's candidates): 0 .. groups − 1
+    std::vector<Index> tested;      ///< size groups: each group's first candidate, ascending
+    std::vector<InsideTest> answer; ///< size groups: the test of candidate tested[g]
+    std::vector<double> path;       ///< size n with distance bounds, else empty
+};
+
+/// For each pair (a, b) of `pairs`, overlapping_slots() of a's tree and b's over the overlap of
+/// their boxes when either surface is closed (else none), as TBB tasks.
+std::vector<SlotPairs> overlapping_slot_pairs(const std::vector<ContactSurface>& surfaces,
+                                              const std::vector<std::pair<Index, Index>>& pairs);
+
+/// Exact-mode answers for every candidate vertex, handed over pair by pair: use(k, answers) for
+/// candidates[k].vertices, called once per pair from that pair's TBB task (pairs run in parallel;
+/// `use` may start nested tasks). Where the other surface is closed, the candidates of a pair are
+/// grouped by clear_edge_groups() and only the first of each group is tested; the others share
+/// its answer, with shared_distance_bound() as theirs. Else every candidate is tested. The tests
+/// of a pair with many groups run in nested tasks; the answers do not depend on the scheduling.
+/// @param[in] slot_pairs  overlapping_slot_pairs() of the pairs (body < other) of `candidates`,
+///                        in their order
+void grouped_inside_tests(const std::vector<ContactSurface>& surfaces, const std::vector<PairCandidates>& candidates,
+                          const std::vector<SlotPairs>& slot_pairs, const AxisRayTolerances& tolerances,
+                          bool distance_bounds, tbb::enumerable_thread_specific<GroupScratch>& scratch,
+                          const std::function<void(std::size_t pair, const GroupedAnswers& answers)>& use);
+
+/// The surface distance bound of candidate i of `answers` that was not tested: the bound of its
+/// group's tested candidate plus its path, rounded up by a relative 10⁻¹² (far above the
+/// rounding of the two terms), so some point of the surface lies within it [m].
+inline double shared_distance_bound(const GroupedAnswers& answers, std::size_t i)
+{
+    const InsideTest& from = answers.answer[static_cast<std::size_t>(answers.group[i])];
+    return (from.surface_distance_bound + answers.path[i]) * (1.0 + 1e-12);
+}
+
+} // namespace coro::detail

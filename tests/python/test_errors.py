@@ -1,0 +1,134 @@
+"""Errors come through as exceptions with the command's messages: InputError where the command
+exits with 2, NumericalError where it exits with 3; values set from Python are checked like the
+case file's."""
+import numpy as np
+import pytest
+
+import corocontact
+from conftest import CASES, SOURCE_DIR, error_message
+
+BAD = SOURCE_DIR / "tests" / "data" / "bad"
+
+
+def corpus(command):
+    """The case files of the bad-input corpus that `corocontact COMMAND` must refuse with exit 2."""
+    rows = [line.split("\t") for line in (BAD / "expected.tsv").read_text().splitlines()
+            if line and not line.startswith("#")]
+    return [name for name, cmd, code, _ in rows if cmd == command and code == "2"]
+
+
+@pytest.mark.parametrize("name", corpus("run"))
+def test_simulation_raises_input_error_with_the_message_of_run(cli, tmp_path, name):
+    result = cli("run", BAD / name, "--out", tmp_path / "cli", check_exit=2)
+    with pytest.raises(corocontact.InputError) as raised:
+        corocontact.Simulation(BAD / name, output_dir=tmp_path / "python")
+    assert str(raised.value) == error_message(result.stderr)
+    assert isinstance(raised.value, ValueError)
+
+
+@pytest.mark.parametrize("name", corpus("detect"))
+def test_detect_raises_input_error_with_the_message_of_detect(cli, tmp_path, name):
+    result = cli("detect", BAD / name, "--csv", tmp_path / "x.csv", check_exit=2)
+    with pytest.raises(corocontact.InputError) as raised:
+        corocontact.detect(BAD / name)
+    assert str(raised.value) == error_message(result.stderr)
+
+
+def test_corpus_is_not_empty():
+    assert len(corpus("run")) >= 10
+
+
+def test_missing_case_file(cli, tmp_path):
+    result = cli("run", tmp_path / "nothing.toml", "--out", tmp_path / "cli", check_exit=2)
+    with pytest.raises(corocontact.InputError) as raised:
+        corocontact.Simulation(tmp_path / "nothing.toml")
+    assert str(raised.value) == error_message(result.stderr)
+    assert "nothing.toml" in str(raised.value)
+
+
+def test_divergence_raises_numerical_error_with_the_message_of_run(cli, tmp_path):
+    case = SOURCE_DIR / "tests" / "cli" / "data" / "soft_block_hit_hard.toml"
+    result = cli("run", case, "--out", tmp_path / "cli", check_exit=3)
+    sim = corocontact.Simulation(case, output_dir=tmp_path / "python")
+    with pytest.raises(corocontact.NumericalError) as raised:
+        sim.step(sim.last_step)
+    assert str(raised.value) == error_message(result.stderr, prefix="error: the simulation diverged: ")
+    assert str(raised.value).startswith("step 2 ")
+    assert isinstance(raised.value, RuntimeError)
+
+
+@pytest.fixture()
+def spheres():
+    return corocontact.Simulation(CASES / "two_spheres" / "two_spheres.toml")
+
+
+def test_values_set_from_python_are_checked_like_the_case_files(spheres):
+    body = spheres.bodies[0]
+    n = body.num_vertices
+    bad = {
+        "velocities": (np.full((n, 3), np.nan), rf"body 'left': velocities\[0\] = \(nan, nan, nan\): expected finite"),
+        "loads": (np.full((n, 3), np.inf), r"body 'left': loads\[0\] = \(inf, inf, inf\): expected finite"),
+    }
+    for attribute, (value, message) in bad.items():
+        with pytest.raises(corocontact.InputError, match=message):
+            setattr(body, attribute, value)
+    with pytest.raises(corocontact.InputError, match=rf"velocities: expected an array of shape \({n}, 3\)"):
+        body.velocities = np.zeros((n, 2))
+    with pytest.raises(corocontact.InputError, match=rf"fixed: expected an array of shape \({n},\), found \(3,\)"):
+        body.fixed = [True, False, True]
+    with pytest.raises(corocontact.InputError, match="expected an array of numbers"):
+        body.loads = "heavy"
+    with pytest.raises(corocontact.InputError, match=r"contact.friction: expected a number >= 0, found -0.1"):
+        spheres.contact_friction = -0.1
+    with pytest.raises(corocontact.InputError, match=r"contact.stiffness: expected a number > 0, found 0"):
+        spheres.contact_stiffness = 0.0
+    with pytest.raises(corocontact.InputError, match=r"contact.damping: expected a finite number >= 0, found inf"):
+        spheres.contact_damping = float("inf")
+    with pytest.raises(corocontact.InputError, match=r"gravity = \(0, nan, 0\): expected finite numbers"):
+        spheres.gravity = [0.0, float("nan"), 0.0]
+    with pytest.raises(corocontact.InputError, match=r"step\(n = -1\): expected n >= 0"):
+        spheres.step(-1)
+    # Nothing was changed by the refused values.
+    assert spheres.contact_friction == 0.0 and spheres.contact_stiffness == 1e6
+    assert np.all(np.isfinite(body.velocities)) and not body.loads.any()
+
+
+def test_fixed_nodes_keep_velocity_zero():
+    sim = corocontact.Simulation(SOURCE_DIR / "cases" / "cantilever" / "cantilever_dynamic.toml")
+    beam = sim.bodies[0]
+    node = int(np.flatnonzero(beam.fixed)[0])
+    with pytest.raises(corocontact.InputError,
+                       match=rf"velocities\[{node}\] = \(1, 0, 0\): node {node} is fixed, expected velocity 0 there"):
+        beam.velocities = [1.0, 0.0, 0.0]
+
+
+def test_contact_settings_need_contact():
+    sim = corocontact.Simulation(SOURCE_DIR / "cases" / "cantilever" / "cantilever_dynamic.toml")
+    with pytest.raises(corocontact.InputError, match=r"contact.friction: the case has no contact"):
+        sim.contact_friction = 0.3
+
+
+def test_threads_must_be_positive():
+    with pytest.raises(corocontact.InputError, match=r"threads = 0: expected an integer >= 1, or None for all cores"):
+        corocontact.Simulation(CASES / "two_spheres" / "two_spheres.toml", threads=0)
+
+
+def test_frames_once_per_step(tmp_path):
+    sim = corocontact.Simulation(CASES / "two_spheres" / "two_spheres.toml", output_dir=tmp_path)
+    assert sim.write_frame() == tmp_path / "two_spheres.pvd"
+    with pytest.raises(corocontact.InputError, match="the frame of step 0 is already written"):
+        sim.write_frame()
+
+
+def test_bad_meshes_name_the_mesh_and_element():
+    vertices = np.array([[0.0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]])
+    with pytest.raises(corocontact.InputError, match=r"meshes\[1\] \('mesh1'\): face 0 refers to vertex 4"):
+        corocontact.detect_meshes([(vertices, [[0, 2, 1]]), (vertices, [[0, 1, 4]])])
+    with pytest.raises(corocontact.InputError, match=r"meshes\[0\]: faces: expected an array of integers"):
+        corocontact.detect_meshes([(vertices, [[0.0, 2.0, 1.0]])])
+    with pytest.raises(corocontact.InputError, match=r"meshes\[0\] \('a'\): tet 0 .*zero volume|meshes\[0\] \('a'\).*tet"):
+        corocontact.detect_meshes([(np.zeros((4, 3)), [[0, 1, 2, 3]])], names=["a"])
+    with pytest.raises(corocontact.InputError, match=r"mode = 'fast': expected \"exact\" or \"paper\""):
+        corocontact.detect_meshes([], mode="fast")
+    with pytest.raises(corocontact.InputError, match=r"mode = 'fast'"):
+        corocontact.detect(CASES / "overlap" / "overlap.toml", mode="fast")
