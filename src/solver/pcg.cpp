@@ -9,6 +9,11 @@ namespace coro {
 
 namespace {
 std::size_t at(Index i) { return static_cast<std::size_t>(i); }
+
+/// A component stops at ‖r‖ ≤ max(tolerance, RESIDUAL_FLOOR)·‖b‖. Below the floor the recursive
+/// residual is far under what double precision resolves in x, and its squares head for
+/// underflow, where pᵀAp would read 0 and look like a matrix that is not positive definite.
+constexpr double RESIDUAL_FLOOR = 1e-30;
 } // namespace
 
 void PcgSolver::prepare_preconditioner(const SceneMatrix& a, const PcgSettings& settings)
@@ -115,6 +120,7 @@ PcgResult PcgSolver::solve(const SceneMatrix& a, CRef<VecX> b, Eigen::Ref<VecX> 
 {
     const Index n = a.num_dofs();
     CORO_ASSERT(b.size() == n && x.size() == n);
+    const double stop = std::max(settings.tolerance, RESIDUAL_FLOOR);
     const RowChunks& chunks = a.chunks();
     m_r.resize(n);
     m_z.resize(n);
@@ -162,7 +168,7 @@ PcgResult PcgSolver::solve(const SceneMatrix& a, CRef<VecX> b, Eigen::Ref<VecX> 
         component.r_norm = std::sqrt(rr);
         component.initial_r_norm = component.r_norm;
         component.rz = rz;
-        component.active = component.r_norm > settings.tolerance * component.b_norm && settings.max_iterations > 0;
+        component.active = component.r_norm > stop * component.b_norm && settings.max_iterations > 0;
     }
     m_p = m_z;
 
@@ -193,7 +199,7 @@ PcgResult PcgSolver::solve(const SceneMatrix& a, CRef<VecX> b, Eigen::Ref<VecX> 
                        "PCG: the residual is not finite at iteration " << component.iterations);
             ++component.iterations;
             component.r_norm = std::sqrt(rr);
-            if (component.r_norm <= settings.tolerance * component.b_norm ||
+            if (component.r_norm <= stop * component.b_norm ||
                 component.iterations >= settings.max_iterations) {
                 component.active = false;
                 continue;
@@ -211,7 +217,7 @@ PcgResult PcgSolver::solve(const SceneMatrix& a, CRef<VecX> b, Eigen::Ref<VecX> 
         const double residual = component.b_norm > 0.0 ? component.r_norm / component.b_norm : 0.0;
         result.iterations = std::max(result.iterations, component.iterations);
         result.residual = std::max(result.residual, residual);
-        result.converged = result.converged && residual <= settings.tolerance;
+        result.converged = result.converged && residual <= stop;
     }
     // The hierarchy's quality is judged by the component that ran longest.
     const auto slowest = std::max_element(m_components.begin(), m_components.end(),

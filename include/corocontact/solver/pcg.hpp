@@ -14,7 +14,8 @@ namespace coro {
 /// Settings of one solve.
 struct PcgSettings {
     Index max_iterations = 100;    ///< iteration cap, ≥ 1
-    double tolerance = 1e-6;       ///< stop when ‖b − Ax‖ ≤ tolerance·‖b‖
+    double tolerance = 1e-6;       ///< stop when ‖b − Ax‖ ≤ tolerance·‖b‖; 0 runs the cap, or
+                                   ///< to ‖b − Ax‖ ≤ 1e-30‖b‖, past which double precision has nothing to add
     PcgPreconditioner preconditioner = PcgPreconditioner::BLOCK_JACOBI;
     AmgSettings amg;               ///< preconditioner = AMG: its knobs (read when it is made)
 };
