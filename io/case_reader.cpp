@@ -46,8 +46,8 @@ const TableSchema SIMULATION_SCHEMA{
     "[simulation]",
     {"name", "analysis", "dt", "steps", "load_steps", "gravity", "output_every", "output_dir"}};
 const TableSchema SOLVER_SCHEMA{"[solver]",
-                                {"max_iterations", "tolerance", "preconditioner", "static_tolerance",
-                                 "static_max_iterations", "parts_per_thread"}};
+                                {"max_iterations", "tolerance", "preconditioner", "matrix_precision",
+                                 "static_tolerance", "static_max_iterations", "parts_per_thread"}};
 const TableSchema CONTACT_SCHEMA{
     "[contact]", {"enabled", "mode", "stiffness", "damping", "friction", "cross_check"}};
 const TableSchema BODY_SCHEMA{
@@ -674,9 +674,13 @@ void read_solver(const TableReader& root, SolverSettings& s)
     t.reject_unknown_keys(SOLVER_SCHEMA);
     s.max_iterations = t.integer("max_iterations", s.max_iterations, 1);
     s.tolerance = t.number("tolerance", s.tolerance, PCG_TOLERANCE);
-    s.preconditioner = t.choice<Preconditioner>(
-        "preconditioner", s.preconditioner,
-        {{"jacobi", Preconditioner::JACOBI}, {"block_jacobi", Preconditioner::BLOCK_JACOBI}});
+    s.preconditioner = t.choice<PcgPreconditioner>("preconditioner", s.preconditioner,
+                                                   {{"jacobi", PcgPreconditioner::JACOBI},
+                                                    {"block_jacobi", PcgPreconditioner::BLOCK_JACOBI},
+                                                    {"amg", PcgPreconditioner::AMG}});
+    s.matrix_precision = t.choice<MatrixPrecision>(
+        "matrix_precision", s.matrix_precision,
+        {{"double", MatrixPrecision::DOUBLE}, {"single", MatrixPrecision::SINGLE}});
     s.static_tolerance = t.number("static_tolerance", s.static_tolerance, RELATIVE_TOLERANCE);
     s.static_max_iterations = t.integer("static_max_iterations", s.static_max_iterations, 1);
     // Times the core count, it must still fit an Index.

@@ -284,6 +284,11 @@ int run_case(const RunOptions& options)
     std::printf("  PCG: %.1f iterations per solve, mean relative residual %.2e, %d of %d solves at the cap\n",
                 summary.cg_iterations_mean, summary.cg_residual_mean, static_cast<int>(summary.solves_not_converged),
                 static_cast<int>(summary.solves));
+    if (summary.preconditioner.setups > 0)
+        std::printf("  AMG: %d hierarchy set-ups in %.3f s, %d V-cycles in %.3f s (%.2f ms each), both within solve\n",
+                    static_cast<int>(summary.preconditioner.setups), summary.preconditioner.setup_s,
+                    static_cast<int>(summary.preconditioner.applies), summary.preconditioner.apply_s,
+                    1e3 * summary.preconditioner.apply_s / std::max<double>(1.0, summary.preconditioner.applies));
     if (coro::contact_applies(spec)) {
         std::printf("  contact: %.1f contact points per detection (vertex inside another body or obstacle, once "
                     "per body), max depth %.4g m",

@@ -39,9 +39,7 @@ PcgSettings pcg_settings(const SolverSettings& solver)
     PcgSettings settings;
     settings.max_iterations = solver.max_iterations;
     settings.tolerance = solver.tolerance;
-    settings.preconditioner = solver.preconditioner == Preconditioner::JACOBI
-                                  ? PcgPreconditioner::JACOBI
-                                  : PcgPreconditioner::BLOCK_JACOBI;
+    settings.preconditioner = solver.preconditioner;
     return settings;
 }
 
@@ -59,6 +57,15 @@ namespace {
 double seconds_since(std::chrono::steady_clock::time_point start)
 {
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+// What a preconditioner did between two readings of its counters, added to `total`.
+void add_difference(const PreconditionerTimes& before, const PreconditionerTimes& after, PreconditionerTimes& total)
+{
+    total.setups += after.setups - before.setups;
+    total.setup_s += after.setup_s - before.setup_s;
+    total.applies += after.applies - before.applies;
+    total.apply_s += after.apply_s - before.apply_s;
 }
 
 void add_solve(const PcgResult& result, RunSummary& summary)
@@ -150,7 +157,9 @@ void Simulation::dynamic_step()
         m_system.assemble(dt, m_spec.simulation.gravity, m_spec.contact.enabled ? m_response.forces() : no_forces);
     }
     ScopedTimer timer(phases.solve);
+    const PreconditionerTimes before = m_system.preconditioner_times();
     add_solve(m_system.solve(pcg_settings(m_spec.solver)), m_totals);
+    add_difference(before, m_system.preconditioner_times(), m_totals.preconditioner);
     m_system.advance(dt);
 }
 
@@ -160,6 +169,7 @@ void Simulation::static_step(Index load_step)
     const double factor = static_cast<double>(load_step) / m_spec.simulation.load_steps;
     for (Body& body : m_scene.bodies) {
         StaticResult result;
+        const PreconditionerTimes before = body.pcg().preconditioner_times();
         try {
             result = solve_static(body, factor, m_spec.simulation.gravity, settings, m_spec.solver.static_tolerance,
                                   m_spec.solver.static_max_iterations, m_totals.phases);
@@ -169,6 +179,7 @@ void Simulation::static_step(Index load_step)
                 throw;
             CORO_THROW(NumericalError, "body '" << body.name() << "': " << what);
         }
+        add_difference(before, body.pcg().preconditioner_times(), m_totals.preconditioner);
         m_totals.solves += result.solves;
         m_totals.cg_iterations_mean += result.cg_iterations;
         m_totals.cg_residual_mean += result.cg_residual_sum;

@@ -47,6 +47,8 @@ struct RunSummary {
     double cg_residual_mean = 0.0;   ///< relative residual after each solve, averaged
     Index solves = 0;              ///< PCG solves done
     Index solves_not_converged = 0; ///< solves that stopped at the iteration cap
+    PreconditionerTimes preconditioner; ///< AMG: hierarchy set-ups and V-cycles (their time is
+                                        ///< part of phases.solve); zero for the other kinds
     Index static_not_converged = 0; ///< static load steps that missed static_tolerance
     double static_iterations_mean = 0.0; ///< static: Newton iterations per load step and body
     Index static_iterations_max = 0;     ///< static: the most Newton iterations of a load step
