@@ -46,8 +46,8 @@ const TableSchema SIMULATION_SCHEMA{
     "[simulation]",
     {"name", "analysis", "dt", "steps", "load_steps", "gravity", "output_every", "output_dir"}};
 const TableSchema SOLVER_SCHEMA{"[solver]",
-                                {"max_iterations", "tolerance", "preconditioner", "static_tolerance",
-                                 "static_max_iterations", "parts_per_thread"}};
+                                {"max_iterations", "tolerance", "preconditioner", "matrix_precision",
+                                 "static_tolerance", "static_max_iterations", "parts_per_thread"}};
 const TableSchema CONTACT_SCHEMA{
     "[contact]", {"enabled", "mode", "stiffness", "damping", "friction", "cross_check"}};
 const TableSchema BODY_SCHEMA{
@@ -237,9 +237,12 @@ bool is_valid_name(const std::string& name)
 
 constexpr const char* NAME_RULE = "a name of 1 to 128 letters, digits, '_', '.' and '-'";
 
-/// " (300 characters)" for a name that is too long, else "".
-std::string length_note(const std::string& name)
+/// Why a name made of allowed characters is still refused: " (300 characters)" for one that is
+/// too long; for "." and "..", that they name folders. Else "".
+std::string name_note(const std::string& name)
 {
+    if (name == "." || name == "..")
+        return " (\".\" and \"..\" are not allowed: they name the current and the parent folder)";
     return name.size() > MAX_NAME_LENGTH ? " (" + std::to_string(name.size()) + " characters)" : "";
 }
 
@@ -603,7 +606,7 @@ void read_simulation(const TableReader& root, const fs::path& file, CaseSpec& sp
         if (!is_valid_name(*name))
             CORO_CASE_ERROR(t.ctx(), t.find("name")->source(), "simulation.name",
                             "expected " << NAME_RULE << " (it becomes a file name), found "
-                                        << describe(*t.find("name")) << length_note(*name));
+                                        << describe(*t.find("name")) << name_note(*name));
         s.name = *name;
     } else {
         s.name = file.stem().string();
@@ -633,6 +636,35 @@ void read_simulation(const TableReader& root, const fs::path& file, CaseSpec& sp
     }
 }
 
+/// A note for the keys of [simulation] that the analysis does not use: a static analysis has
+/// no time steps (its steps are load_steps, and it writes every one), a dynamic one no load steps.
+std::optional<std::string> unused_simulation_keys(const TableReader& root, const SimulationSettings& s)
+{
+    const toml::table* table = root.sub_table("simulation");
+    if (table == nullptr)
+        return std::nullopt;
+    const TableReader t(root.ctx(), *table, "simulation");
+    const bool dynamic = s.analysis == Analysis::DYNAMIC;
+    const std::vector<std::string_view> keys =
+        dynamic ? std::vector<std::string_view>{"load_steps"} : std::vector<std::string_view>{"dt", "steps", "output_every"};
+    std::vector<std::string_view> given;
+    for (const std::string_view key : keys)
+        if (t.find(key))
+            given.push_back(key);
+    if (given.empty())
+        return std::nullopt;
+    std::ostringstream note;
+    note << t.ctx().where(t.key_region(given.front())) << ": ";
+    for (std::size_t k = 0; k < given.size(); ++k)
+        note << (k == 0 ? "" : k + 1 == given.size() ? " and " : ", ") << t.full(given[k]);
+    note << (given.size() == 1 ? " is" : " are") << " not used by a" << (dynamic ? " dynamic" : " static")
+         << " analysis, which "
+         << (dynamic ? "runs simulation.steps time steps" : "has no time steps: it runs simulation.load_steps = " +
+                                                                std::to_string(s.load_steps) +
+                                                                " load steps and writes every one");
+    return note.str();
+}
+
 void read_solver(const TableReader& root, SolverSettings& s)
 {
     const toml::table* table = root.sub_table("solver");
@@ -642,9 +674,13 @@ void read_solver(const TableReader& root, SolverSettings& s)
     t.reject_unknown_keys(SOLVER_SCHEMA);
     s.max_iterations = t.integer("max_iterations", s.max_iterations, 1);
     s.tolerance = t.number("tolerance", s.tolerance, PCG_TOLERANCE);
-    s.preconditioner = t.choice<Preconditioner>(
-        "preconditioner", s.preconditioner,
-        {{"jacobi", Preconditioner::JACOBI}, {"block_jacobi", Preconditioner::BLOCK_JACOBI}});
+    s.preconditioner = t.choice<PcgPreconditioner>("preconditioner", s.preconditioner,
+                                                   {{"jacobi", PcgPreconditioner::JACOBI},
+                                                    {"block_jacobi", PcgPreconditioner::BLOCK_JACOBI},
+                                                    {"amg", PcgPreconditioner::AMG}});
+    s.matrix_precision = t.choice<MatrixPrecision>(
+        "matrix_precision", s.matrix_precision,
+        {{"double", MatrixPrecision::DOUBLE}, {"single", MatrixPrecision::SINGLE}});
     s.static_tolerance = t.number("static_tolerance", s.static_tolerance, RELATIVE_TOLERANCE);
     s.static_max_iterations = t.integer("static_max_iterations", s.static_max_iterations, 1);
     // Times the core count, it must still fit an Index.
@@ -753,7 +789,7 @@ BodySpec read_body(const TableReader& t, Index k)
         if (!is_valid_name(*name))
             CORO_CASE_ERROR(t.ctx(), t.find("name")->source(), t.full("name"),
                             "expected " << NAME_RULE << ", found " << describe(*t.find("name"))
-                                        << length_note(*name));
+                                        << name_note(*name));
         body.name = *name;
     } else {
         body.name = "body" + std::to_string(k);
@@ -897,6 +933,12 @@ void reject_block_name_clashes(const Context& ctx, const std::vector<TableReader
 
 CaseSpec parse_case(const std::string& text, const fs::path& file)
 {
+    std::vector<std::string> notes;
+    return parse_case(text, file, notes);
+}
+
+CaseSpec parse_case(const std::string& text, const fs::path& file, std::vector<std::string>& notes)
+{
     Context ctx;
     ctx.file = file.string();
     ctx.base_dir = (file.empty() ? fs::current_path() : fs::absolute(file).parent_path()).lexically_normal();
@@ -913,6 +955,8 @@ CaseSpec parse_case(const std::string& text, const fs::path& file)
     const TableReader root(ctx, document, "");
     root.reject_unknown_keys(ROOT_SCHEMA);
     read_simulation(root, file, spec);
+    if (auto note = unused_simulation_keys(root, spec.simulation))
+        notes.push_back(std::move(*note));
     read_solver(root, spec.solver);
     read_contact(root, spec.contact);
 
@@ -942,6 +986,12 @@ CaseSpec parse_case(const std::string& text, const fs::path& file)
 
 CaseSpec read_case(const fs::path& file)
 {
+    std::vector<std::string> notes;
+    return read_case(file, notes);
+}
+
+CaseSpec read_case(const fs::path& file, std::vector<std::string>& notes)
+{
     std::error_code ec;
     const fs::file_status status = fs::status(file, ec);
     CORO_CHECK(fs::exists(status), InputError,
@@ -953,7 +1003,7 @@ CaseSpec read_case(const fs::path& file)
                file.string() << ": cannot open the case file: " << std::strerror(errno));
     std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
     CORO_CHECK(!in.bad(), InputError, file.string() << ": cannot read the case file: read error");
-    return parse_case(text, file);
+    return parse_case(text, file, notes);
 }
 
 #undef CORO_CASE_ERROR

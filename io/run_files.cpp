@@ -99,9 +99,15 @@ RemovedFiles remove_earlier_run(const fs::path& dir, const std::string& name, In
     for (const fs::path& folder : folders)
         remove_frame_folder(folder, removed);
 
-    for (const fs::path& file : {summary_path(dir, name), checkpoint_path(dir, name)}) {
-        if (file != checkpoint_path(dir, name) || !keep_checkpoint)
+    const fs::path checkpoint = checkpoint_path(dir, name);
+    for (const fs::path& file : {summary_path(dir, name), checkpoint}) {
+        if (file == checkpoint && !keep_checkpoint) {
+            const Index before = removed.files;
             remove_file(file, removed);
+            removed.checkpoint = removed.files > before;
+        } else if (file != checkpoint) {
+            remove_file(file, removed);
+        }
         remove_file(fs::path(file).concat(TMP), removed);
     }
     return removed;

@@ -196,7 +196,8 @@ LoadedScene load_scene(const CaseSpec& spec, const LoadProgress& progress)
         detail::check_magnitudes(spec, body_spec, mesh);
         report(which + ": METIS parts and element set-up, " + std::to_string(mesh.num_tets()) +
                (mesh.num_tets() == 1 ? " tet" : " tets"));
-        Body body(mesh, body_spec, default_num_parts(mesh.num_tets(), spec.solver.parts_per_thread));
+        Body body(mesh, body_spec, default_num_parts(mesh.num_tets(), spec.solver.parts_per_thread),
+                  spec.solver.matrix_precision);
         if (!body_spec.surface.empty()) {
             report(which + ": embedding " + body_spec.surface.filename().string());
             SurfaceMesh surface;

@@ -23,7 +23,7 @@
 
 #include <corocontact/io/case_reader.hpp>
 #include <corocontact/io/scene_loader.hpp>
-#include <corocontact/solver/amg_preconditioner.hpp>
+#include <corocontact/solver/scene_matrix.hpp>
 #include <corocontact/solver/pcg.hpp>
 #include <corocontact/solver/vector_ops.hpp>
 
@@ -99,7 +99,7 @@ Row ours(const System& s, PcgPreconditioner kind, double tolerance)
     const auto start = Clock::now();
     const PcgResult result = pcg.solve(s.bsr, s.b, x, settings);
     Row row;
-    row.method = kind == PcgPreconditioner::JACOBI ? "ours jacobi" : "ours block_jacobi";
+    row.method = std::string("ours ") + preconditioner_name(kind);
     row.step = s.step;
     row.solve_s = seconds_since(start);
     row.iterations = result.iterations;
@@ -457,41 +457,35 @@ System combine(std::vector<Body>& bodies, const std::vector<Index>& chosen, cons
     return s;
 }
 
-/// Our PCG iteration (q = Ap with pᵀq, then x, r and z = M⁻¹r, then p) with the AMG
-/// preconditioner component: what phase 2 puts into PcgSolver.
-Row ours_with_amg(const System& s, AmgPreconditioner& amg, double tolerance, bool reused)
+/// A variant of our AMG preconditioner, as the bench labels it.
+struct AmgVariant {
+    std::string name;
+    AmgSettings settings;
+};
+
+/// PcgSolver with the AMG preconditioner on the system as a one-body scene; the set-up the
+/// solve made (if any) is reported apart from the solve.
+Row ours_with_amg(const System& s, PcgSolver& pcg, const AmgVariant& variant, double tolerance, bool reused)
 {
-    Row row;
-    row.method = std::string("ours + AmgPreconditioner") + (reused ? " (reused)" : "");
-    row.step = s.step;
-    if (!reused) {
-        const double before = amg.times().setup_s;
-        amg.setup(s.bsr, s.positions);
-        row.setup_s = amg.times().setup_s - before;
-    }
+    SceneMatrix scene({&s.bsr});
+    scene.set_node_positions({&s.positions});
+    PcgSettings settings;
+    settings.max_iterations = 10000;
+    settings.tolerance = tolerance;
+    settings.preconditioner = PcgPreconditioner::AMG;
+    settings.amg = variant.settings;
+    const PreconditionerTimes before = pcg.preconditioner_times();
+    VecX x = s.x0;
     const auto start = Clock::now();
-    const Index n = s.bsr.num_dofs();
-    VecX x = s.x0, r(n), z(n), p(n), q(n);
-    s.bsr.multiply(x, r);
-    r = s.b - r;
-    amg.apply(r, z);
-    p = z;
-    double rz = dot(r, z);
-    const double target = tolerance * norm(s.b);
-    Index it = 0;
-    while (norm(r) > target && it < 10000) {
-        s.bsr.multiply(p, q);
-        const double alpha = rz / dot(p, q);
-        axpy(alpha, p, x);
-        axpy(-alpha, q, r);
-        amg.apply(r, z);
-        const double next = dot(r, z);
-        xpby(z, next / rz, p);
-        rz = next;
-        ++it;
-    }
-    row.solve_s = seconds_since(start);
-    row.iterations = it;
+    const PcgResult result = pcg.solve(scene, s.b, x, settings);
+    const double seconds = seconds_since(start);
+    const PreconditionerTimes after = pcg.preconditioner_times();
+    Row row;
+    row.method = "ours amg " + variant.name + (reused ? " (reused)" : "");
+    row.step = s.step;
+    row.setup_s = after.setup_s - before.setup_s;
+    row.solve_s = seconds - row.setup_s;
+    row.iterations = result.iterations;
     row.residual = true_residual(s, x);
     return row;
 }
@@ -582,25 +576,41 @@ int run(int argc, char** argv)
     // Every method on every kept system, interleaved, `repeat` times; then the medians.
     using Method = std::function<std::vector<Row>()>;
     std::deque<std::pair<std::string, Method>> methods; // (a vector trips GCC 12's -Warray-bounds here)
-    methods.emplace_back("ours", [&] {
-        std::vector<Row> rows;
-        for (const System& s : systems)
-            for (const PcgPreconditioner kind : {PcgPreconditioner::JACOBI, PcgPreconditioner::BLOCK_JACOBI})
+    for (const PcgPreconditioner kind : {PcgPreconditioner::JACOBI, PcgPreconditioner::BLOCK_JACOBI})
+        methods.emplace_back(std::string("ours ") + preconditioner_name(kind), [&, kind] {
+            std::vector<Row> rows;
+            for (const System& s : systems)
                 rows.push_back(ours(s, kind, tolerance));
-        return rows;
-    });
-    methods.emplace_back("ours + AmgPreconditioner", [&] {
-        std::vector<Row> rows;
-        for (const System& s : systems) {
-            AmgPreconditioner fresh;
-            rows.push_back(ours_with_amg(s, fresh, tolerance, false));
-        }
-        AmgPreconditioner first;
-        first.setup(systems.front().bsr, systems.front().positions);
-        for (std::size_t i = 1; i < systems.size(); ++i)
-            rows.push_back(ours_with_amg(systems[i], first, tolerance, true));
-        return rows;
-    });
+            return rows;
+        });
+    std::vector<AmgVariant> amg_variants;
+    for (const bool scene_fine_level : {true, false})
+        for (const int smoothing : {1, 0})
+            for (const int fine : {1, 2, 3, 4})
+                for (const int coarse : {1, 2}) {
+                    AmgVariant variant;
+                    variant.settings.scene_fine_level = scene_fine_level;
+                    variant.settings.fine_degree = fine;
+                    variant.settings.coarse_degree = coarse;
+                    variant.settings.aggregation_smoothing = smoothing;
+                    variant.name = std::string(scene_fine_level ? "scene-fine" : "petsc-fine") +
+                                   (smoothing ? " sa" : " plain") + " cheb" + std::to_string(fine) + "/" +
+                                   std::to_string(coarse);
+                    amg_variants.push_back(variant);
+                }
+    for (const AmgVariant& variant : amg_variants)
+        methods.emplace_back("ours amg " + variant.name, [&, variant] {
+            std::vector<Row> rows;
+            for (const System& s : systems) {
+                PcgSolver fresh;
+                rows.push_back(ours_with_amg(s, fresh, variant, tolerance, false));
+            }
+            PcgSolver first;
+            ours_with_amg(systems.front(), first, variant, tolerance, false);
+            for (std::size_t i = 1; i < systems.size(); ++i)
+                rows.push_back(ours_with_amg(systems[i], first, variant, tolerance, true));
+            return rows;
+        });
     const std::vector<HypreVariant> hypre_variants{
         {"scalar", 1, 0, false, 0.5, 8, 0},
         {"systems", 3, 0, false, 0.5, 8, 0},

@@ -13,6 +13,7 @@
 #include <corocontact/core/surface_topology.hpp>
 #include <corocontact/io/case_reader.hpp>
 #include <corocontact/io/mesh_readers.hpp>
+#include <corocontact/io/output_file.hpp>
 #include <corocontact/io/output_lock.hpp>
 #include <corocontact/io/rank_output.hpp>
 #include <corocontact/io/run_files.hpp>
@@ -43,14 +44,17 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cerrno>
 #include <charconv>
 #include <chrono>
 #include <csignal>
 #include <cstdio>
+#include <cstring>
 #include <iostream>
 #include <limits>
 #include <memory>
 #include <set>
+#include <sstream>
 
 namespace {
 
@@ -131,6 +135,28 @@ std::string count_of(std::size_t n, const char* one, const char* many)
     return std::to_string(n) + " " + (n == 1 ? one : many);
 }
 
+/// Flushes stdout and checks it: stdout is buffered, so a failed write (a full disk, a closed
+/// descriptor) shows only at a flush or in its error flag. Every command ends with it.
+/// @throws OutputError "writing to standard output: <strerror>"
+void flush_stdout()
+{
+    errno = 0;
+    const bool flushed = std::fflush(stdout) == 0;
+    const int error = errno;
+    CORO_CHECK(flushed && !std::ferror(stdout), OutputError,
+               "writing to standard output: " << (error != 0 ? std::strerror(error) : "an earlier write failed"));
+}
+
+/// Writes `text` to stdout now, checked (a CSV larger than stdout's buffer fails at the write).
+void write_stdout(const std::string& text)
+{
+    if (std::fwrite(text.data(), 1, text.size(), stdout) != text.size()) {
+        const int error = errno;
+        CORO_THROW(OutputError, "writing to standard output: " << std::strerror(error));
+    }
+    flush_stdout();
+}
+
 /// Runs a case; `ranks` is null in one process, else the processes of a distributed run
 /// (docs/scale_out.md): each holds its bodies, rank 0 alone prints and holds the output lock,
 /// and every step, frame and checkpoint is collective, a failure anywhere throwing on every
@@ -143,7 +169,10 @@ int run_case(const RunOptions& options, coro::Communicator* ranks)
     std::ostream& messages = root ? std::cerr : null_stream();
     coro::CaseSpec spec;
     coro::run_collectively(ranks, [&] {
-        spec = coro::read_case(options.case_file);
+        std::vector<std::string> notes;
+        spec = coro::read_case(options.case_file, notes);
+        for (const std::string& note : notes)
+            messages << "note: " << note << "\n";
         if (!options.out.empty())
             spec.simulation.output_dir = options.out;
         if (options.steps > 0) {
@@ -153,6 +182,15 @@ int run_case(const RunOptions& options, coro::Communicator* ranks)
                                      "the time steps of a dynamic one");
             spec.simulation.steps = static_cast<coro::Index>(options.steps); // the option's range is an Index's
         }
+        // AMG's hierarchy is built from one process's whole matrix; a distributed scene has its
+        // rows on several.
+        CORO_CHECK(ranks == nullptr || ranks->size() == 1 ||
+                       spec.solver.preconditioner != coro::PcgPreconditioner::AMG,
+                   InputError,
+                   options.case_file << ": solver.preconditioner = \"amg\" runs in one process only, and this run "
+                                        "has "
+                                     << ranks->size()
+                                     << " (mpirun): use \"block_jacobi\" or \"jacobi\" for a distributed run");
     });
     const auto checkpoint_every = static_cast<coro::Index>(options.checkpoint_every);
     // One run per output folder, claimed before the (possibly long) load; a run refused for bad
@@ -247,7 +285,9 @@ int run_case(const RunOptions& options, coro::Communicator* ranks)
     });
     if (removed.files > 0 && !options.quiet)
         messages << "removed " << removed.files << " files (" << removed.frames << " frames) of an earlier run of "
-                 << spec.simulation.name << " from " << out_dir.string() << "\n";
+                 << spec.simulation.name << " from " << out_dir.string()
+                 << (removed.checkpoint ? ", its checkpoint among them (a run without --restart starts over)" : "")
+                 << "\n";
     coro::run_collectively(ranks, [&] {
         writer = std::make_unique<coro::VtkSeriesWriter>(out_dir, spec.simulation.name);
         for (const coro::FrameRecord& frame : frames)
@@ -331,6 +371,11 @@ int run_case(const RunOptions& options, coro::Communicator* ranks)
     std::printf("  PCG: %.1f iterations per solve, mean relative residual %.2e, %d of %d solves at the cap\n",
                 summary.cg_iterations_mean, summary.cg_residual_mean, static_cast<int>(summary.solves_not_converged),
                 static_cast<int>(summary.solves));
+    if (summary.preconditioner.setups > 0)
+        std::printf("  AMG: %d hierarchy set-ups in %.3f s, %d V-cycles in %.3f s (%.2f ms each), both within solve\n",
+                    static_cast<int>(summary.preconditioner.setups), summary.preconditioner.setup_s,
+                    static_cast<int>(summary.preconditioner.applies), summary.preconditioner.apply_s,
+                    1e3 * summary.preconditioner.apply_s / std::max<double>(1.0, summary.preconditioner.applies));
     if (coro::contact_applies(spec)) {
         std::printf("  contact: %.1f contact points per detection (vertex inside another body or obstacle, once "
                     "per body), max depth %.4g m",
@@ -352,7 +397,7 @@ int run_case(const RunOptions& options, coro::Communicator* ranks)
                 summary_path.string().c_str());
     if (checkpoints)
         std::printf("  checkpoint: %s\n", checkpoint_path.string().c_str());
-    std::fflush(stdout);
+    flush_stdout();
     if (summary.stop_signal != 0) {
         std::fprintf(stderr, "%s: interrupted by %s at step %d of %d; frames, series and summary are complete up to it\n",
                      spec.simulation.name.c_str(), signal_name(summary.stop_signal), static_cast<int>(summary.steps),
@@ -433,9 +478,9 @@ int detect_case(const DetectOptions& options)
 #endif
     const std::string csv = coro::contacts_csv(surfaces, points);
     if (options.csv == "-")
-        std::fputs(csv.c_str(), stdout);
+        write_stdout(csv);
     else if (!options.csv.empty())
-        coro::write_file_atomically(options.csv, csv);
+        coro::write_output_file(options.csv, csv);
     return 0;
 }
 
@@ -513,6 +558,12 @@ int describe_mesh(const std::string& path, int parts)
     std::printf("  quality (mean ratio, 1 = regular): min %.4f, mean %.4f\n", q_min, q_sum / mesh.num_tets());
     std::printf("  reoriented tets %d, nodes in no tet %zu\n", reoriented, coro::unreferenced_vertices(mesh).size());
     std::printf("  boundary surface %s\n", describe_topology(topology).c_str());
+    if (parts > mesh.num_tets()) {
+        std::fprintf(stderr, "note: --parts %d: the mesh has %s, and a part holds at least one; using %d parts\n",
+                     parts, count_of(static_cast<std::size_t>(mesh.num_tets()), "tet", "tets").c_str(),
+                     mesh.num_tets());
+        parts = mesh.num_tets();
+    }
     if (parts > 0) {
         const coro::TetPartition partition = coro::partition_tets(mesh.tets, mesh.num_vertices(), parts);
         const coro::PartLayout layout = coro::make_part_layout(mesh.tets, mesh.num_vertices(), partition);
@@ -601,13 +652,24 @@ int main(int argc, char** argv)
     info_command->add_option("--parts", parts, "tet mesh: also partition into K METIS parts: edge-cut and balance")
         ->check(whole_number(1, INDEX_MAX));
     verbose_flag(info_command, "");
+    threads_option(info_command); // after the command too, as run and detect take it
     info_command->set_version_flag("--version", std::string("corocontact ") + CORO_VERSION);
 
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& error) {
-        const int code = root ? app.exit(error) : app.exit(error, null_stream(), null_stream());
-        return code == 0 ? 0 : EXIT_BAD_INPUT;
+        std::ostringstream help; // --help, --version: written to stdout (by rank 0), checked
+        if (app.exit(error, help, root ? std::cerr : null_stream()) != 0)
+            return EXIT_BAD_INPUT;
+        if (!root)
+            return 0;
+        try {
+            write_stdout(help.str());
+        } catch (const coro::OutputError& output_error) {
+            std::cerr << "error: " << output_error.what() << "\n";
+            return EXIT_OUTPUT_FAILED;
+        }
+        return 0;
     }
 
     if (verbose)
@@ -624,16 +686,20 @@ int main(int argc, char** argv)
     std::ostream& errors = root ? std::cerr : null_stream();
     const auto dispatch = [&]() -> int {
         try {
-            if (run_command->parsed())
-                return run_case(run, ranks);
-            if (detect_command->parsed())
-                return detect_case(detect);
-            if (is_surface_file(mesh_path)) {
+            int code = 0;
+            if (run_command->parsed()) {
+                code = run_case(run, ranks);
+            } else if (detect_command->parsed()) {
+                code = detect_case(detect);
+            } else if (is_surface_file(mesh_path)) {
                 CORO_CHECK(parts == 0, InputError,
                            "--parts: " << mesh_path << " is a triangle surface; METIS parts are for tet meshes");
-                return describe_surface(mesh_path);
+                code = describe_surface(mesh_path);
+            } else {
+                code = describe_mesh(mesh_path, parts);
             }
-            return describe_mesh(mesh_path, parts);
+            flush_stdout();
+            return code;
         } catch (const coro::InputError& error) {
             errors << "error: " << error.what() << "\n";
             return EXIT_BAD_INPUT;
@@ -660,3 +726,4 @@ int main(int argc, char** argv)
     }
     return dispatch();
 }
+

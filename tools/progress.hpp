@@ -1,8 +1,8 @@
 #pragma once
 // Progress of a run on stderr: on a terminal one line, redrawn in place and cut to the
-// terminal's width; otherwise plain lines at most every 5 s. The ETA comes from the steps of
-// the last few seconds, so a run whose steps slow down (contact starting) is not promised an
-// early end.
+// terminal's width; otherwise (a log, a pipe) plain lines: a loading stage that took long when
+// it ends, a step line at most every 5 s. The ETA comes from the steps of the last few seconds,
+// so a run whose steps slow down (contact starting) is not promised an early end.
 
 #include <sys/ioctl.h>
 #include <unistd.h>
@@ -107,29 +107,30 @@ class Progress {
 public:
     using Clock = std::chrono::steady_clock;
 
-    Progress(bool enabled, bool terminal, std::FILE* out = stderr)
-        : m_enabled(enabled), m_terminal(terminal), m_out(out)
+    /// @param[in] enabled        false with --quiet: nothing is printed
+    /// @param[in] terminal       whether `out` is a terminal
+    /// @param[in] long_stage_s   not on a terminal, a loading stage that took at least this
+    ///                           long [s] gets a line when it ends
+    Progress(bool enabled, bool terminal, std::FILE* out = stderr, double long_stage_s = 2.0)
+        : m_enabled(enabled), m_terminal(terminal), m_out(out), m_long_stage_s(long_stage_s)
     {
     }
 
     /// Steps done before this process started (a restarted run).
     void set_first(long first) { m_first = first; }
 
-    /// What is being done before the first step (loading a body, building trees): on a
-    /// terminal it replaces the line (no clock: it would stand still until the next stage);
-    /// otherwise a plain line with the time since the start, at most every 5 s.
+    /// What is being done before the first step (loading a body, building trees); the stage
+    /// before it has ended. On a terminal it replaces the line (no clock: it would stand still
+    /// until the next stage); otherwise the stage that ended gets a plain line if it was long.
     void status(const std::string& what)
     {
         if (!m_enabled)
             return;
-        const auto now = Clock::now();
-        if (m_terminal) {
+        end_stage();
+        m_stage = what;
+        m_stage_start = Clock::now();
+        if (m_terminal)
             draw(cut("loading: " + what, terminal_width(fileno(m_out)) - 1));
-        } else if (seconds(m_last_print, now) >= 5.0) {
-            std::fprintf(m_out, "loading, %s: %s\n", format_seconds(seconds(m_start, now)).c_str(), what.c_str());
-            std::fflush(m_out);
-            m_last_print = now;
-        }
     }
 
     /// The time loop starts now: elapsed time and ETA count from here.
@@ -140,9 +141,12 @@ public:
         m_rate.add(0.0, m_first);
     }
 
-    /// Removes a status line from the terminal (before other messages are printed).
+    /// Loading has ended: removes a status line from the terminal (before other messages are
+    /// printed), or reports the last stage if it was long.
     void clear()
     {
+        if (m_enabled)
+            end_stage();
         if (m_pending_newline)
             std::fputs("\r\033[K", m_out);
         m_pending_newline = false;
@@ -190,6 +194,20 @@ private:
         return std::chrono::duration<double>(to - from).count();
     }
 
+    /// Not on a terminal: "loading: body 'box' (1 of 1): METIS parts and element set-up,
+    /// 2058000 tets: 8.8 s" for a stage that took long, when it ends.
+    void end_stage()
+    {
+        if (m_stage.empty())
+            return;
+        const double took = seconds(m_stage_start, Clock::now());
+        if (!m_terminal && took >= m_long_stage_s) {
+            std::fprintf(m_out, "loading: %s: %s\n", m_stage.c_str(), format_seconds(took).c_str());
+            std::fflush(m_out);
+        }
+        m_stage.clear();
+    }
+
     /// At most `room` bytes, not ending inside a UTF-8 character (body names may be UTF-8).
     static std::string cut(std::string text, int room)
     {
@@ -213,6 +231,9 @@ private:
     bool m_enabled;
     bool m_terminal;
     std::FILE* m_out;
+    double m_long_stage_s;
+    std::string m_stage; ///< the loading stage under way, empty if none
+    Clock::time_point m_stage_start;
     long m_first = 0;
     bool m_pending_newline = false;
     RecentRate m_rate;

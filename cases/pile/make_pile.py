@@ -14,7 +14,7 @@ gravity = [0.0, -9.81, 0.0]
 output_every = 25
 
 [solver]
-max_iterations = 40
+max_iterations = 300
 tolerance = 1e-5
 preconditioner = "block_jacobi"
 

@@ -34,73 +34,71 @@ void block_points(const std::vector<ContactSurface>& surfaces, const PairCandida
 
 Index count_pairs(const std::vector<PairCandidates>& candidates) { return static_cast<Index>(candidates.size() / 2); }
 
-struct Block {
-    std::size_t pair;
-    Index begin, end;
-};
-
 /// A pass whose answers come from `inside(k, points, count, results)` for each block of
 /// candidates, the blocks as TBB tasks.
 template <class Inside>
-std::vector<ContactPoint> run_detection(const std::vector<ContactSurface>& surfaces,
-                                        const std::vector<PairCandidates>& candidates, const Inside& inside,
-                                        bool contact_data, detail::DetectionState& state, DetectionStats* stats,
-                                        const CustomNarrowPhase* custom = nullptr)
+void run_detection(const std::vector<ContactSurface>& surfaces, const std::vector<PairCandidates>& candidates,
+                   const Inside& inside, bool contact_data, detail::DetectionState& state, DetectionStats* stats,
+                   std::vector<ContactPoint>& points, const CustomNarrowPhase* custom = nullptr)
 {
     DetectionPass pass(surfaces, candidates, contact_data, state, custom);
-    std::vector<Block> blocks;
+    std::vector<detail::CandidateBlock>& blocks = state.blocks;
+    blocks.clear();
     for (std::size_t k = 0; k < candidates.size(); ++k) {
         const auto n = static_cast<Index>(candidates[k].vertices.size());
         for (Index b = 0; b < n; b += VERTEX_BLOCK)
-            blocks.push_back({k, b, std::min(n, b + VERTEX_BLOCK)});
+            blocks.push_back({k, b, std::min(VERTEX_BLOCK, n - b)});
     }
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, blocks.size(), 1),
                       [&](const tbb::blocked_range<std::size_t>& range) {
-                          Vec3 points[VERTEX_BLOCK];
+                          Vec3 block_positions[VERTEX_BLOCK];
                           InsideTest results[VERTEX_BLOCK];
                           for (std::size_t b = range.begin(); b < range.end(); ++b) {
-                              const Block& block = blocks[b];
-                              const Index count = block.end - block.begin;
-                              block_points(surfaces, candidates[block.pair], block.begin, count, points);
-                              inside(block.pair, points, count, results);
-                              pass.take(block.pair, block.begin, count, results);
+                              const detail::CandidateBlock& block = blocks[b];
+                              block_points(surfaces, candidates[block.pair], block.first, block.count,
+                                           block_positions);
+                              inside(block.pair, block_positions, block.count, results);
+                              pass.take(block.pair, block.first, block.count, results);
                           }
                       });
-    return pass.finish(count_pairs(candidates), stats);
+    pass.finish(count_pairs(candidates), stats, points);
 }
 
-/// The broad phase: the pairs of surfaces whose boxes (from their trees) overlap, sorted.
-std::vector<std::pair<Index, Index>> overlapping_surfaces(const std::vector<ContactSurface>& surfaces)
+/// The broad phase: the pairs of surfaces whose boxes (from their trees) overlap, into
+/// state.pairs, sorted.
+void overlapping_surfaces(const std::vector<ContactSurface>& surfaces, detail::DetectionState& state)
 {
-    std::vector<Aabb> boxes;
-    boxes.reserve(surfaces.size());
+    state.boxes.clear();
     for (const ContactSurface& s : surfaces)
-        boxes.push_back(s.tree.bounds());
-    return overlapping_pairs(boxes);
+        state.boxes.push_back(s.tree.bounds());
+    overlapping_pairs(state.boxes, state.pairs, state.sweep_order);
 }
 
-/// contact_candidates() of the broad phase's `pairs`.
-std::vector<PairCandidates> pair_candidates(const std::vector<ContactSurface>& surfaces,
-                                            const std::vector<std::pair<Index, Index>>& pairs, DetectionMode mode)
+/// The mid phase of the broad phase's state.pairs: contact_candidates() into state.candidates.
+const std::vector<PairCandidates>& pair_candidates(const std::vector<ContactSurface>& surfaces, DetectionMode mode,
+                                                   detail::DetectionState& state)
 {
     const auto box = [&](Index s) { return surfaces[static_cast<std::size_t>(s)].tree.bounds(); };
-    std::vector<PairCandidates> candidates(2 * pairs.size());
-    for (std::size_t k = 0; k < pairs.size(); ++k) {
-        const auto [a, b] = pairs[k];
-        candidates[2 * k].body = a;
-        candidates[2 * k].other = b;
-        candidates[2 * k + 1].body = b;
-        candidates[2 * k + 1].other = a;
+    // Both directions of each pair, ordered by (body, other).
+    state.directed.clear();
+    for (const auto& [a, b] : state.pairs) {
+        state.directed.emplace_back(a, b);
+        state.directed.emplace_back(b, a);
     }
+    std::sort(state.directed.begin(), state.directed.end());
+    std::vector<PairCandidates>& candidates = state.candidates.assign(state.directed);
+    for (std::size_t k = 0; k < candidates.size(); ++k)
+        std::tie(candidates[k].body, candidates[k].other) = state.directed[k];
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, candidates.size(), 1),
                       [&](const tbb::blocked_range<std::size_t>& range) {
-                          std::vector<Index> overlapping;
+                          std::vector<Index>& overlapping = state.overlapping_faces.local();
                           for (std::size_t k = range.begin(); k < range.end(); ++k) {
                               PairCandidates& c = candidates[k];
                               const ContactSurface& body = surfaces[static_cast<std::size_t>(c.body)];
                               const ContactSurface& other = surfaces[static_cast<std::size_t>(c.other)];
                               c.overlap = box(c.body).intersection(box(c.other));
                               body.tree.vertices_in_box(body.vertices, c.overlap, c.vertices);
+                              c.faces.clear();
                               if (mode != DetectionMode::PAPER)
                                   continue;
                               other.tree.faces_overlapping(other.vertices, c.overlap, overlapping);
@@ -113,18 +111,71 @@ std::vector<PairCandidates> pair_candidates(const std::vector<ContactSurface>& s
                               }
                           }
                       });
-    // Ordered by (body, other): the pairs are sorted by (min, max); reorder both directions.
-    std::sort(candidates.begin(), candidates.end(), [](const PairCandidates& x, const PairCandidates& y) {
-        return std::tie(x.body, x.other) < std::tie(y.body, y.other);
-    });
     return candidates;
+}
+
+/// Broad and mid phase into `state`.
+const std::vector<PairCandidates>& find_candidates(const std::vector<ContactSurface>& surfaces, DetectionMode mode,
+                                                   detail::DetectionState& state)
+{
+    overlapping_surfaces(surfaces, state);
+    return pair_candidates(surfaces, mode, state);
+}
+
+/// Mid phase and narrow phase of the broad phase's state.pairs, into points.
+void detect_pairs(const std::vector<ContactSurface>& surfaces, const DetectionSettings& settings,
+                  detail::DetectionState& state, std::vector<ContactPoint>& points, DetectionStats* stats)
+{
+    if (!settings.share_answers || settings.mode != DetectionMode::EXACT) {
+        const std::vector<PairCandidates>& candidates = pair_candidates(surfaces, settings.mode, state);
+        run_detection(
+            surfaces, candidates,
+            [&](std::size_t k, const Vec3* positions, Index count, InsideTest* results) {
+                const PairCandidates& pair = candidates[k];
+                detail::inside_tests(surfaces[static_cast<std::size_t>(pair.other)], positions, count, settings.mode,
+                                     pair.faces, settings.tolerances, results);
+            },
+            settings.contact_data, state, stats, points);
+        return;
+    }
+
+    // The mid phase and the face pairs of the groups need only the broad phase: one parallel
+    // phase for both.
+    tbb::parallel_invoke([&] { pair_candidates(surfaces, settings.mode, state); },
+                         [&] { detail::overlapping_slot_pairs(surfaces, state.pairs, state.slot_pairs); });
+    const std::vector<PairCandidates>& candidates = state.candidates.items();
+    // Each pair's answers are taken in its own task, as they come; with depth searches to do,
+    // its blocks are nested tasks.
+    DetectionPass pass(surfaces, candidates, settings.contact_data, state);
+    detail::grouped_inside_tests(
+        surfaces, candidates, state.slot_pairs.items(), settings.tolerances, settings.contact_data, state.grouping,
+        [&](std::size_t k, const detail::GroupedAnswers& answers) {
+            const auto n = static_cast<Index>(answers.group.size());
+            const Index blocks = (n + VERTEX_BLOCK - 1) / VERTEX_BLOCK;
+            const auto take_block = [&](Index b) {
+                const Index first = b * VERTEX_BLOCK;
+                pass.take(k, first, std::min(VERTEX_BLOCK, n - first), answers);
+            };
+            if (!pass.contact_data() || blocks <= 1) {
+                for (Index b = 0; b < blocks; ++b)
+                    take_block(b);
+                return;
+            }
+            tbb::parallel_for(tbb::blocked_range<Index>(0, blocks, 1), [&](const tbb::blocked_range<Index>& r) {
+                for (Index b = r.begin(); b < r.end(); ++b)
+                    take_block(b);
+            });
+        });
+    pass.finish(count_pairs(candidates), stats, points);
 }
 
 } // namespace
 
 std::vector<PairCandidates> contact_candidates(const std::vector<ContactSurface>& surfaces, DetectionMode mode)
 {
-    return pair_candidates(surfaces, overlapping_surfaces(surfaces), mode);
+    detail::DetectionState state;
+    find_candidates(surfaces, mode, state);
+    return std::move(state.candidates.items());
 }
 
 DetectionScratch::DetectionScratch() : m_state(std::make_unique<detail::DetectionState>()) {}
@@ -143,7 +194,17 @@ std::vector<ContactPoint> detect_contacts(const std::vector<ContactSurface>& sur
                                           const DetectionSettings& settings, DetectionScratch& scratch,
                                           DetectionStats* stats)
 {
-    return detect_contacts(surfaces, overlapping_surfaces(surfaces), settings, scratch, stats);
+    std::vector<ContactPoint> points;
+    detect_contacts(surfaces, settings, scratch, points, stats);
+    return points;
+}
+
+void detect_contacts(const std::vector<ContactSurface>& surfaces, const DetectionSettings& settings,
+                     DetectionScratch& scratch, std::vector<ContactPoint>& points, DetectionStats* stats)
+{
+    detail::DetectionState& state = detail::ScratchAccess::state(scratch);
+    overlapping_surfaces(surfaces, state);
+    detect_pairs(surfaces, settings, state, points, stats);
 }
 
 std::vector<ContactPoint> detect_contacts(const std::vector<ContactSurface>& surfaces,
@@ -153,61 +214,27 @@ std::vector<ContactPoint> detect_contacts(const std::vector<ContactSurface>& sur
 {
     CORO_ASSERT(std::is_sorted(pairs.begin(), pairs.end()));
     detail::DetectionState& state = detail::ScratchAccess::state(scratch);
-    if (!settings.share_answers || settings.mode != DetectionMode::EXACT) {
-        const std::vector<PairCandidates> candidates = pair_candidates(surfaces, pairs, settings.mode);
-        return run_detection(
-            surfaces, candidates,
-            [&](std::size_t k, const Vec3* points, Index count, InsideTest* results) {
-                const PairCandidates& pair = candidates[k];
-                detail::inside_tests(surfaces[static_cast<std::size_t>(pair.other)], points, count, settings.mode,
-                                     pair.faces, settings.tolerances, results);
-            },
-            settings.contact_data, state, stats);
-    }
-
-    // The mid phase and the face pairs of the groups need only the broad phase: one parallel
-    // phase for both.
-    std::vector<PairCandidates> candidates;
-    std::vector<detail::SlotPairs> slot_pairs;
-    tbb::parallel_invoke([&] { candidates = pair_candidates(surfaces, pairs, settings.mode); },
-                         [&] { slot_pairs = detail::overlapping_slot_pairs(surfaces, pairs); });
-    // Each pair's answers are taken in its own task, as they come; with depth searches to do,
-    // its blocks are nested tasks.
-    DetectionPass pass(surfaces, candidates, settings.contact_data, state);
-    detail::grouped_inside_tests(
-        surfaces, candidates, slot_pairs, settings.tolerances, settings.contact_data, state.groups,
-        [&](std::size_t k, const detail::GroupedAnswers& answers) {
-            const auto n = static_cast<Index>(answers.group.size());
-            const Index blocks = (n + VERTEX_BLOCK - 1) / VERTEX_BLOCK;
-            const auto take_block = [&](Index b) {
-                const Index first = b * VERTEX_BLOCK;
-                pass.take(k, first, std::min(VERTEX_BLOCK, n - first), answers);
-            };
-            if (!pass.contact_data() || blocks <= 1) {
-                for (Index b = 0; b < blocks; ++b)
-                    take_block(b);
-                return;
-            }
-            tbb::parallel_for(tbb::blocked_range<Index>(0, blocks, 1), [&](const tbb::blocked_range<Index>& r) {
-                for (Index b = r.begin(); b < r.end(); ++b)
-                    take_block(b);
-            });
-        });
-    return pass.finish(count_pairs(candidates), stats);
+    state.pairs = pairs;
+    std::vector<ContactPoint> points;
+    detect_pairs(surfaces, settings, state, points, stats);
+    return points;
 }
 
 std::vector<ContactPoint> detect_contacts(const std::vector<ContactSurface>& surfaces,
                                           const CustomNarrowPhase& narrow, bool contact_data, DetectionStats* stats)
 {
     DetectionScratch scratch;
-    const std::vector<PairCandidates> candidates = contact_candidates(surfaces, DetectionMode::EXACT);
-    return run_detection(
+    detail::DetectionState& state = detail::ScratchAccess::state(scratch);
+    const std::vector<PairCandidates>& candidates = find_candidates(surfaces, DetectionMode::EXACT, state);
+    std::vector<ContactPoint> points;
+    run_detection(
         surfaces, candidates,
-        [&](std::size_t k, const Vec3* points, Index count, InsideTest* results) {
+        [&](std::size_t k, const Vec3* positions, Index count, InsideTest* results) {
             for (Index i = 0; i < count; ++i)
-                results[i] = narrow.inside(candidates[k].other, points[i]);
+                results[i] = narrow.inside(candidates[k].other, positions[i]);
         },
-        contact_data, detail::ScratchAccess::state(scratch), stats, &narrow);
+        contact_data, state, stats, points, &narrow);
+    return points;
 }
 
 } // namespace coro

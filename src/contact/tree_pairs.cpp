@@ -67,16 +67,18 @@ void for_each_lane_pair(const Node& a, const Node& b, const WideBox& region, con
     }
 }
 
-/// The node pairs (a's, b's) from which the walk runs in parallel: together they lead to every
-/// pair of faces, each once, in an order fixed by the trees.
-std::vector<std::array<Index, 2>> walk_tasks(const AabbTree& ta, const AabbTree& tb, const WideBox& region)
+/// The node pairs (a's, b's) from which the walk runs in parallel, into `level` (`next` is
+/// working memory): together they lead to every pair of faces, each once, in an order fixed by
+/// the trees.
+void walk_tasks(const AabbTree& ta, const AabbTree& tb, const WideBox& region, std::vector<std::array<Index, 2>>& level,
+                std::vector<std::array<Index, 2>>& next)
 {
     // Enough tasks for two threads to share the walk evenly, however the overlap is spread.
     constexpr std::size_t MIN_TASKS = 16;
     constexpr int MAX_LEVELS = 4;
     const auto& nodes_a = TreeAccess::nodes(ta);
     const auto& nodes_b = TreeAccess::nodes(tb);
-    std::vector<std::array<Index, 2>> level{{0, 0}}, next;
+    level.assign(1, {0, 0});
     for (int depth = 0; depth < MAX_LEVELS && level.size() < MIN_TASKS; ++depth) {
         next.clear();
         bool split = false;
@@ -101,7 +103,6 @@ std::vector<std::array<Index, 2>> walk_tasks(const AabbTree& ta, const AabbTree&
         if (!split)
             break;
     }
-    return level;
 }
 
 /// The slot pairs below node a_root of `ta` and b_root of `tb`, appended to `pairs`.
@@ -170,7 +171,8 @@ void walk(const AabbTree& ta, const AabbTree& tb, const WideBox& region, Index a
 
 } // namespace
 
-void detail::overlapping_slots(const AabbTree& a, const AabbTree& b, const Aabb& region, Pairs& pairs)
+void detail::overlapping_slots(const AabbTree& a, const AabbTree& b, const Aabb& region, Pairs& pairs,
+                               SlotWalkScratch& scratch)
 {
     pairs.clear();
     const auto& nodes_a = TreeAccess::nodes(a);
@@ -186,18 +188,29 @@ void detail::overlapping_slots(const AabbTree& a, const AabbTree& b, const Aabb&
     }
     // Large trees: the walk's node pairs a few levels down both trees, found level by level
     // (each level of both trees taken once), as tasks, their pairs joined in task order.
-    const std::vector<std::array<Index, 2>> tasks = walk_tasks(a, b, wide_region);
-    std::vector<Pairs> parts(tasks.size());
+    const std::vector<std::array<Index, 2>>& tasks = scratch.tasks;
+    walk_tasks(a, b, wide_region, scratch.tasks, scratch.next_level);
+    std::vector<Pairs>& parts = scratch.parts;
+    if (parts.size() < tasks.size())
+        parts.resize(tasks.size());
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, tasks.size(), 1), [&](const tbb::blocked_range<std::size_t>& r) {
-        for (std::size_t t = r.begin(); t < r.end(); ++t)
+        for (std::size_t t = r.begin(); t < r.end(); ++t) {
+            parts[t].clear();
             walk(a, b, wide_region, tasks[t][0], tasks[t][1], parts[t]);
+        }
     });
     std::size_t total = 0;
-    for (const Pairs& part : parts)
-        total += part.size();
+    for (std::size_t t = 0; t < tasks.size(); ++t)
+        total += parts[t].size();
     pairs.reserve(total);
-    for (const Pairs& part : parts)
-        pairs.insert(pairs.end(), part.begin(), part.end());
+    for (std::size_t t = 0; t < tasks.size(); ++t)
+        pairs.insert(pairs.end(), parts[t].begin(), parts[t].end());
+}
+
+void detail::overlapping_slots(const AabbTree& a, const AabbTree& b, const Aabb& region, Pairs& pairs)
+{
+    SlotWalkScratch scratch;
+    overlapping_slots(a, b, region, pairs, scratch);
 }
 
 void AabbTree::overlapping_faces(const AabbTree& other, const Aabb& region, Pairs& pairs) const

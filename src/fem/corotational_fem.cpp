@@ -163,6 +163,7 @@ CorotationalFem::CorotationalFem(const TetMesh& mesh, const Material& material, 
         m_part_force_buffer_offsets[at(p) + 1] = n_force_entries;
     }
     m_block_buffer.assign(9 * at(n_block_entries), 0.0);
+    m_single_block_buffer.assign(9 * at(n_block_entries), 0.0f);
     m_force_buffer.assign(3 * at(n_force_entries), 0.0);
 
     // Interface blocks: every block of an interface row, with its entries in part order.
@@ -179,19 +180,29 @@ CorotationalFem::CorotationalFem(const TetMesh& mesh, const Material& material, 
 
 void CorotationalFem::element_part(Index part, const Pass& pass)
 {
+    if (pass.matrix && pass.matrix->precision() == MatrixPrecision::SINGLE)
+        element_part_in(part, pass, pass.matrix->single_values().data(), m_single_block_buffer.data());
+    else
+        element_part_in(part, pass, pass.matrix ? pass.matrix->values().data() : nullptr, m_block_buffer.data());
+}
+
+template <class Value>
+void CorotationalFem::element_part_in(Index part, const Pass& pass, Value* values, Value* block_buffer)
+{
     const Index t_begin = m_layout.tet_offsets[at(part)], t_end = m_layout.tet_offsets[at(part) + 1];
     const Index r_begin = m_layout.node_offsets[at(part)], r_end = m_layout.node_offsets[at(part) + 1];
-    double* values = pass.matrix ? pass.matrix->values().data() : nullptr;
-    double* block_buffer = m_block_buffer.data();
     double* force_buffer = m_force_buffer.data();
 
     if (values) {
         std::fill(values + 9 * static_cast<std::ptrdiff_t>(m_row_offsets[at(r_begin)]),
-                  values + 9 * static_cast<std::ptrdiff_t>(m_row_offsets[at(r_end)]), 0.0);
-        for (Index r = r_begin; r < r_end; ++r)
-            pass.matrix->block(pass.matrix->diagonal(r)).diagonal().array() += pass.mass_scale * m_masses[r];
+                  values + 9 * static_cast<std::ptrdiff_t>(m_row_offsets[at(r_end)]), Value(0));
+        for (Index r = r_begin; r < r_end; ++r) {
+            Value* diagonal = values + 9 * static_cast<std::ptrdiff_t>(pass.matrix->diagonal(r));
+            for (int i = 0; i < 3; ++i)
+                diagonal[4 * i] = static_cast<Value>(pass.mass_scale * m_masses[r]);
+        }
         std::fill(block_buffer + 9 * static_cast<std::ptrdiff_t>(m_part_block_buffer_offsets[at(part)]),
-                  block_buffer + 9 * static_cast<std::ptrdiff_t>(m_part_block_buffer_offsets[at(part) + 1]), 0.0);
+                  block_buffer + 9 * static_cast<std::ptrdiff_t>(m_part_block_buffer_offsets[at(part) + 1]), Value(0));
     }
     if (pass.forces) {
         std::fill(pass.forces + 3 * static_cast<std::ptrdiff_t>(r_begin),
@@ -199,7 +210,7 @@ void CorotationalFem::element_part(Index part, const Pass& pass)
         std::fill(force_buffer + 3 * static_cast<std::ptrdiff_t>(m_part_force_buffer_offsets[at(part)]),
                   force_buffer + 3 * static_cast<std::ptrdiff_t>(m_part_force_buffer_offsets[at(part) + 1]), 0.0);
     }
-    const Slots slots{values, block_buffer, pass.forces, force_buffer};
+    const Slots<Value> slots{values, block_buffer, pass.forces, force_buffer};
     if (!pass.rotate || (!pass.forces && !values)) {
         tet_range(t_begin, t_end, pass, slots);
         return;
@@ -211,7 +222,7 @@ void CorotationalFem::element_part(Index part, const Pass& pass)
     rotate_only.rotate = true;
     Pass assemble_only = pass;
     assemble_only.rotate = false;
-    const Slots no_outputs{nullptr, nullptr, nullptr, nullptr};
+    const Slots<Value> no_outputs{nullptr, nullptr, nullptr, nullptr};
     for (Index chunk = t_begin; chunk < t_end; chunk += FUSED_CHUNK) {
         const Index chunk_end = std::min(chunk + FUSED_CHUNK, t_end);
         tet_range(chunk, chunk_end, rotate_only, no_outputs);
@@ -219,7 +230,8 @@ void CorotationalFem::element_part(Index part, const Pass& pass)
     }
 }
 
-void CorotationalFem::tet_range(Index t_begin, Index t_end, const Pass& pass, const Slots& slots)
+template <class Value>
+void CorotationalFem::tet_range(Index t_begin, Index t_end, const Pass& pass, const Slots<Value>& slots)
 {
     Index t = t_begin;
 #if defined(CORO_TET_PACKS)
@@ -230,7 +242,8 @@ void CorotationalFem::tet_range(Index t_begin, Index t_end, const Pass& pass, co
         one_tet(t, pass, slots);
 }
 
-void CorotationalFem::one_tet(Index t, const Pass& pass, const Slots& slots)
+template <class Value>
+void CorotationalFem::one_tet(Index t, const Pass& pass, const Slots<Value>& slots)
 {
     const Mat34& g = m_gradients[at(t)];
     const Mat34 nodes = pass.x ? gather_nodes(m_tets, t, pass.x) : Mat34(Mat34::Zero());
@@ -272,7 +285,8 @@ void CorotationalFem::one_tet(Index t, const Pass& pass, const Slots& slots)
 }
 
 #if defined(CORO_TET_PACKS)
-void CorotationalFem::tet_pack(Index first, int count, const Pass& pass, const Slots& slots)
+template <class Value>
+void CorotationalFem::tet_pack(Index first, int count, const Pass& pass, const Slots<Value>& slots)
 {
     using namespace detail;
     // Lanes past `count` repeat the last tet; nothing of theirs is stored.
@@ -330,24 +344,34 @@ void CorotationalFem::tet_pack(Index first, int count, const Pass& pass, const S
 }
 #endif
 
+template <class Value>
+Block3 CorotationalFem::interface_block_sum(Index b, const Value* block_buffer) const
+{
+    Block3 sum = Block3::Zero();
+    for (Index e = m_interface_block_offsets[at(b)]; e < m_interface_block_offsets[at(b) + 1]; ++e)
+        sum += Eigen::Map<const Eigen::Matrix<Value, 3, 3, Eigen::RowMajor>>(
+                   block_buffer + 9 * at(m_interface_block_entries[at(e)]))
+                   .template cast<double>();
+    return sum;
+}
+
 void CorotationalFem::finish_rows(Index row_begin, Index row_end, const Pass& pass)
 {
     const Index first_interface = m_layout.first_interface_node();
     const Index begin = std::max(row_begin, first_interface);
     if (pass.matrix) {
         BsrMatrix& matrix = *pass.matrix;
+        const bool single = matrix.precision() == MatrixPrecision::SINGLE;
         // Interface block b is block m_row_offsets[first_interface] + b of the matrix.
         const Index first_block = m_row_offsets[at(first_interface)];
-        for (Index r = begin; r < row_end; ++r) {
+        for (Index r = begin; r < row_end; ++r)
             for (Index k = m_row_offsets[at(r)]; k < m_row_offsets[at(r) + 1]; ++k) {
-                const Index b = k - first_block;
-                Block3 sum = Block3::Zero();
-                for (Index e = m_interface_block_offsets[at(b)]; e < m_interface_block_offsets[at(b) + 1]; ++e)
-                    sum += Eigen::Map<const Block3>(m_block_buffer.data() + 9 * at(m_interface_block_entries[at(e)]));
-                matrix.block(k) = sum;
+                Block3 sum = single ? interface_block_sum(k - first_block, m_single_block_buffer.data())
+                                    : interface_block_sum(k - first_block, m_block_buffer.data());
+                if (k == matrix.diagonal(r))
+                    sum.diagonal().array() += pass.mass_scale * m_masses[r];
+                matrix.set_block(k, sum);
             }
-            matrix.block(matrix.diagonal(r)).diagonal().array() += pass.mass_scale * m_masses[r];
-        }
         if (pass.fixed)
             project_fixed_rows(row_begin, row_end, pass.fixed, matrix);
     }
@@ -377,13 +401,13 @@ void CorotationalFem::project_fixed_rows(Index row_begin, Index row_end, const c
     for (Index r = row_begin; r < row_end; ++r) {
         if (fixed[r]) {
             for (Index k = m_row_offsets[at(r)]; k < m_row_offsets[at(r) + 1]; ++k)
-                matrix.block(k).setZero();
-            matrix.block(matrix.diagonal(r)) = Block3::Identity();
+                matrix.set_block(k, Block3::Zero());
+            matrix.set_block(matrix.diagonal(r), Block3::Identity());
             continue;
         }
         for (Index k = m_row_offsets[at(r)]; k < m_row_offsets[at(r) + 1]; ++k)
             if (fixed[m_columns[at(k)]])
-                matrix.block(k).setZero();
+                matrix.set_block(k, Block3::Zero());
     }
 }
 
@@ -464,7 +488,7 @@ double CorotationalFem::strain_energy(CRef<VecX> x) const
     return energy;
 }
 
-BsrMatrix CorotationalFem::make_matrix() const
+BsrMatrix CorotationalFem::make_matrix(MatrixPrecision precision) const
 {
     // Product chunks: each part's interior rows, then the interface rows cut into pieces of
     // about a part's size (they couple mostly among themselves).
@@ -478,7 +502,7 @@ BsrMatrix CorotationalFem::make_matrix() const
         chunks.push_back(std::min(r + piece, num_vertices()));
     if (chunks.size() == 1)
         chunks.push_back(num_vertices());
-    return BsrMatrix::symmetric_upper(m_row_offsets, m_columns, chunks);
+    return BsrMatrix::symmetric_upper(m_row_offsets, m_columns, chunks, precision);
 }
 
 VecX CorotationalFem::von_mises_stress(CRef<VecX> x) const

@@ -136,7 +136,7 @@ void CorotationalTangent::assemble(CorotationalFem& fem, CRef<VecX> x, const std
                                       const Mat3 gb = cross_matrix(terms.rotated_gradients.col(term.b));
                                       sum.noalias() -= ga * terms.weight * gb; // [G_a]×ᵀ = −[G_a]×
                                   }
-                                  tangent.block(k) += sum;
+                                  tangent.add_to_block(k, sum);
                               }
                           }
                       });

@@ -23,12 +23,12 @@ Body::Partitioned Body::partition_mesh(const TetMesh& mesh, Index num_parts)
     return result;
 }
 
-Body::Body(const TetMesh& mesh, const BodySpec& spec, Index num_parts)
-    : Body(partition_mesh(mesh, num_parts), spec)
+Body::Body(const TetMesh& mesh, const BodySpec& spec, Index num_parts, MatrixPrecision precision)
+    : Body(partition_mesh(mesh, num_parts), spec, precision)
 {
 }
 
-Body::Body(Partitioned&& partitioned, const BodySpec& spec)
+Body::Body(Partitioned&& partitioned, const BodySpec& spec, MatrixPrecision precision)
     : m_name(spec.name), m_edge_cut(partitioned.edge_cut), m_mesh(std::move(partitioned.mesh)),
       m_fem(m_mesh, spec.material, std::move(partitioned.layout)), m_rayleigh_mass(spec.rayleigh_mass),
       m_rayleigh_stiffness(spec.rayleigh_stiffness)
@@ -69,7 +69,7 @@ Body::Body(Partitioned&& partitioned, const BodySpec& spec)
             m_velocities.segment<3>(3 * v).setZero();
             ++m_num_fixed;
         }
-    m_system = m_fem.make_matrix();
+    m_system = m_fem.make_matrix(precision);
 }
 
 void Body::fix_vertex(Index v)

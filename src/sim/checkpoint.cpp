@@ -18,7 +18,7 @@ namespace {
 
 constexpr char MAGIC[8] = {'C', 'O', 'R', 'O', 'C', 'K', 'P', 'T'};
 constexpr char END[4] = {'E', 'N', 'D', '!'};
-constexpr std::uint32_t VERSION = 2;
+constexpr std::uint32_t VERSION = 3;
 
 std::uint64_t fnv1a(const char* data, std::size_t size)
 {
@@ -115,10 +115,12 @@ void put_summary(Writer& w, const RunSummary& s)
     w.put<std::int64_t>(s.steps);
     for (const double v : {s.wall_s, s.steps_per_s, s.phases.rotation, s.phases.assembly, s.phases.solve,
                            s.phases.contact, s.phases.output, s.cg_iterations_mean, s.cg_residual_mean,
-                           s.max_contact_depth, s.contacts_mean, s.static_iterations_mean})
+                           s.max_contact_depth, s.contacts_mean, s.static_iterations_mean,
+                           s.preconditioner.setup_s, s.preconditioner.apply_s})
         w.put(v);
     for (const Index v : {s.solves, s.solves_not_converged, s.static_not_converged, s.detections,
-                          s.embree_disagreements, s.first_step, s.static_iterations_max})
+                          s.embree_disagreements, s.first_step, s.static_iterations_max,
+                          s.preconditioner.setups, s.preconditioner.applies})
         w.put<std::int64_t>(v);
 }
 
@@ -128,10 +130,12 @@ RunSummary get_summary(Reader& r)
     s.steps = static_cast<Index>(r.get<std::int64_t>("counters"));
     for (double* v : {&s.wall_s, &s.steps_per_s, &s.phases.rotation, &s.phases.assembly, &s.phases.solve,
                       &s.phases.contact, &s.phases.output, &s.cg_iterations_mean, &s.cg_residual_mean,
-                      &s.max_contact_depth, &s.contacts_mean, &s.static_iterations_mean})
+                      &s.max_contact_depth, &s.contacts_mean, &s.static_iterations_mean,
+                      &s.preconditioner.setup_s, &s.preconditioner.apply_s})
         *v = r.get<double>("counters");
     for (Index* v : {&s.solves, &s.solves_not_converged, &s.static_not_converged, &s.detections,
-                     &s.embree_disagreements, &s.first_step, &s.static_iterations_max})
+                     &s.embree_disagreements, &s.first_step, &s.static_iterations_max,
+                     &s.preconditioner.setups, &s.preconditioner.applies})
         *v = static_cast<Index>(r.get<std::int64_t>("counters"));
     return s;
 }

@@ -31,7 +31,7 @@ std::optional<std::string> iteration_cap_warning(const RunSummary& summary, cons
         << " PCG solves stopped at solver.max_iterations = " << solver.max_iterations
         << " before reaching solver.tolerance = " << tolerance << " (mean relative residual " << residual
         << "), so the results depend on the cap. Raise max_iterations";
-    if (solver.preconditioner == Preconditioner::JACOBI)
+    if (solver.preconditioner == PcgPreconditioner::JACOBI)
         out << ", use preconditioner = \"block_jacobi\"";
     out << ", or set tolerance = 0 to run the cap on every solve on purpose";
     return out.str();

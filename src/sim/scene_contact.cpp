@@ -1,9 +1,13 @@
 #include <corocontact/sim/scene_contact.hpp>
 
 #include <corocontact/contact/broad_phase.hpp>
+#include <corocontact/core/error.hpp>
 #include <corocontact/core/surface_mesh.hpp>
 #include <corocontact/sim/body.hpp>
 #include <corocontact/sim/simulation.hpp>
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <cstdio>
@@ -45,26 +49,43 @@ std::vector<ContactSurface> make_scene_surfaces(const Scene& scene)
 
 void update_contact_surfaces(const std::vector<Body>& bodies, std::vector<ContactSurface>& surfaces)
 {
-    std::vector<Eigen::Map<const Positions>> positions;
-    positions.reserve(bodies.size());
-    for (const Body& body : bodies)
-        positions.push_back(as_positions(body.positions()));
-    update_surfaces(surfaces, positions);
+    CORO_CHECK(bodies.size() <= surfaces.size(), InputError,
+               "update_contact_surfaces: " << bodies.size() << " bodies for " << surfaces.size() << " surfaces");
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, bodies.size(), 1),
+                      [&](const tbb::blocked_range<std::size_t>& r) {
+                          for (std::size_t b = r.begin(); b < r.end(); ++b)
+                              surfaces[b].update(as_positions(bodies[b].positions()));
+                      });
 }
 
 void contact_components(const std::vector<ContactSurface>& surfaces, Index num_bodies,
                         std::vector<Index>& component_of_body)
 {
-    std::vector<Aabb> boxes;
-    boxes.reserve(static_cast<std::size_t>(num_bodies));
+    ComponentScratch scratch;
+    contact_components(surfaces, num_bodies, scratch, component_of_body);
+}
+
+void contact_components(const std::vector<ContactSurface>& surfaces, Index num_bodies, ComponentScratch& scratch,
+                        std::vector<Index>& component_of_body)
+{
+    std::vector<Aabb>& boxes = scratch.boxes;
+    boxes.clear();
     for (Index b = 0; b < num_bodies; ++b)
         boxes.push_back(surfaces[static_cast<std::size_t>(b)].tree.bounds());
-    contact_components(boxes, component_of_body);
+    contact_components_of_boxes(boxes, scratch, component_of_body);
 }
 
 void contact_components(const std::vector<Aabb>& body_boxes, std::vector<Index>& component_of_body)
 {
+    ComponentScratch scratch;
+    contact_components_of_boxes(body_boxes, scratch, component_of_body);
+}
+
+void contact_components_of_boxes(const std::vector<Aabb>& body_boxes, ComponentScratch& scratch,
+                                 std::vector<Index>& component_of_body)
+{
     const auto num_bodies = static_cast<Index>(body_boxes.size());
+    overlapping_pairs(body_boxes, scratch.pairs, scratch.sweep_order);
     // Union-find with the lower body as root, so a component's root is its first body.
     std::vector<Index>& root = component_of_body;
     root.resize(static_cast<std::size_t>(num_bodies));
@@ -75,7 +96,7 @@ void contact_components(const std::vector<Aabb>& body_boxes, std::vector<Index>&
             b = root[static_cast<std::size_t>(b)] = root[static_cast<std::size_t>(root[static_cast<std::size_t>(b)])];
         return b;
     };
-    for (const auto& [i, j] : overlapping_pairs(body_boxes)) {
+    for (const auto& [i, j] : scratch.pairs) {
         const Index a = find(i), c = find(j);
         root[static_cast<std::size_t>(std::max(a, c))] = std::min(a, c);
     }

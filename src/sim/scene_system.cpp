@@ -24,6 +24,10 @@ std::vector<const BsrMatrix*> SceneSystem::body_matrices(std::vector<Body>& bodi
 
 SceneSystem::SceneSystem(std::vector<Body>& bodies) : m_bodies(bodies), m_matrix(body_matrices(bodies))
 {
+    std::vector<const VecX*> positions;
+    for (const Body& body : bodies)
+        positions.push_back(&body.positions());
+    m_matrix.set_node_positions(std::move(positions));
     // Work items: the bodies' parts in order, cut into runs of at least ELEMENT_TASK_TETS tets.
     Index tets = 0;
     for (Index b = 0; b < static_cast<Index>(bodies.size()); ++b) {

@@ -43,9 +43,7 @@ PcgSettings pcg_settings(const SolverSettings& solver)
     PcgSettings settings;
     settings.max_iterations = solver.max_iterations;
     settings.tolerance = solver.tolerance;
-    settings.preconditioner = solver.preconditioner == Preconditioner::JACOBI
-                                  ? PcgPreconditioner::JACOBI
-                                  : PcgPreconditioner::BLOCK_JACOBI;
+    settings.preconditioner = solver.preconditioner;
     return settings;
 }
 
@@ -92,6 +90,15 @@ namespace {
 double seconds_since(std::chrono::steady_clock::time_point start)
 {
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+// What a preconditioner did between two readings of its counters, added to `total`.
+void add_difference(const PreconditionerTimes& before, const PreconditionerTimes& after, PreconditionerTimes& total)
+{
+    total.setups += after.setups - before.setups;
+    total.setup_s += after.setup_s - before.setup_s;
+    total.applies += after.applies - before.applies;
+    total.apply_s += after.apply_s - before.apply_s;
 }
 
 void add_solve(const PcgResult& result, RunSummary& summary)
@@ -148,14 +155,18 @@ void Simulation::detect(RunSummary& summary)
         return;
     }
     update_contact_surfaces(m_scene.bodies, m_scene.surfaces);
-    m_scene.contacts = detect_contacts(m_scene.surfaces, detection_settings(m_spec.contact), m_detection);
-    if (!m_scene.planes.empty()) {
-        std::vector<ContactPoint> planes = detect_plane_contacts(
-            m_scene.surfaces, static_cast<Index>(m_scene.bodies.size()), m_scene.planes);
-        m_scene.contacts.insert(m_scene.contacts.end(), planes.begin(), planes.end());
-        std::sort(m_scene.contacts.begin(), m_scene.contacts.end(), contact_order);
+    // Into buffers kept from step to step: a step allocates nothing once they have grown.
+    const auto num_bodies = static_cast<Index>(m_scene.bodies.size());
+    detect_contacts(m_scene.surfaces, detection_settings(m_spec.contact), m_detection, m_surface_contacts);
+    if (m_scene.planes.empty()) {
+        m_scene.contacts.swap(m_surface_contacts);
+    } else {
+        detect_plane_contacts(m_scene.surfaces, num_bodies, m_scene.planes, m_plane_contacts, m_plane_scratch);
+        m_scene.contacts.resize(m_surface_contacts.size() + m_plane_contacts.size());
+        std::merge(m_surface_contacts.begin(), m_surface_contacts.end(), m_plane_contacts.begin(),
+                   m_plane_contacts.end(), m_scene.contacts.begin(), contact_order);
     }
-    contact_components(m_scene.surfaces, static_cast<Index>(m_scene.bodies.size()), m_components);
+    contact_components(m_scene.surfaces, num_bodies, m_component_scratch, m_components);
     m_system.matrix().set_components(m_components);
     m_response.compute(m_scene.bodies, m_scene.surfaces, m_scene.contacts, m_spec.contact, m_spec.simulation.dt,
                        m_system.matrix());
@@ -200,10 +211,12 @@ void Simulation::dynamic_step()
         m_system.assemble(dt, m_spec.simulation.gravity, m_spec.contact.enabled ? m_response.forces() : no_forces);
     });
     ScopedTimer timer(phases.solve);
+    const PreconditionerTimes before = m_system.preconditioner_times();
     const std::uint64_t bytes = m_ranks ? m_ranks->communicator.bytes_received() : 0;
     add_solve(m_system.solve(pcg_settings(m_spec.solver), m_ranks ? &m_ranks->exchange : nullptr), m_totals);
     if (m_ranks)
         m_ranks->solve_bytes += m_ranks->communicator.bytes_received() - bytes;
+    add_difference(before, m_system.preconditioner_times(), m_totals.preconditioner);
     collectively([&] { m_system.advance(dt); });
 }
 
@@ -213,6 +226,7 @@ void Simulation::static_step(Index load_step)
     const double factor = static_cast<double>(load_step) / m_spec.simulation.load_steps;
     for (Body& body : m_scene.bodies) {
         StaticResult result;
+        const PreconditionerTimes before = body.pcg().preconditioner_times();
         try {
             result = solve_static(body, factor, m_spec.simulation.gravity, settings, m_spec.solver.static_tolerance,
                                   m_spec.solver.static_max_iterations, m_totals.phases);
@@ -222,6 +236,7 @@ void Simulation::static_step(Index load_step)
                 throw;
             CORO_THROW(NumericalError, "body '" << body.name() << "': " << what);
         }
+        add_difference(before, body.pcg().preconditioner_times(), m_totals.preconditioner);
         m_totals.solves += result.solves;
         m_totals.cg_iterations_mean += result.cg_iterations;
         m_totals.cg_residual_mean += result.cg_residual_sum;

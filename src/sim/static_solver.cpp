@@ -2,6 +2,7 @@
 
 #include <corocontact/core/error.hpp>
 #include <corocontact/fem/corotational_tangent.hpp>
+#include <corocontact/solver/scene_matrix.hpp>
 #include <corocontact/solver/vector_ops.hpp>
 
 #include <algorithm>
@@ -80,6 +81,8 @@ StaticResult solve_static(Body& body, double load_factor, const Vec3& gravity,
     };
     StaticResult result;
     CorotationalTangent tangent(fem);
+    SceneMatrix system({&body.system_matrix()}); // with the node positions AMG needs
+    system.set_node_positions({&x});
     PcgSettings solve_settings = settings;
     // Δx = K_T⁻¹ r; false if PCG met negative curvature (it throws NumericalError on pᵀAp ≤ 0).
     const auto solve_step = [&](TangentDefiniteness kind, CRef<VecX> r, VecX& step, bool may_fail) {
@@ -91,7 +94,7 @@ StaticResult solve_static(Body& body, double load_factor, const Vec3& gravity,
         step.setZero();
         PcgResult solve;
         try {
-            solve = body.pcg().solve(body.system_matrix(), r, step, solve_settings);
+            solve = body.pcg().solve(system, r, step, solve_settings);
         } catch (const NumericalError&) {
             if (!may_fail)
                 throw;

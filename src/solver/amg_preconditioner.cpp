@@ -1,17 +1,34 @@
 #include <corocontact/solver/amg_preconditioner.hpp>
 
 #include <corocontact/core/error.hpp>
+#include <corocontact/solver/scene_matrix.hpp>
 
 #include <petscksp.h>
 
 #include <algorithm>
 #include <array>
 #include <chrono>
+#include <cmath>
+#include <cstdint>
 #include <stdexcept>
 #include <string>
+#include <tuple>
 #include <vector>
 
 namespace coro {
+
+void HierarchyReuse::record_solve(Index iterations, double reduction)
+{
+    if (iterations <= 0)
+        return; // a solve that started converged says nothing about the hierarchy
+    // Iterations per decade of reduction; a solve that reduced nothing counts as very slow.
+    const double decades = reduction > 0.0 && reduction < 1.0 ? -std::log10(reduction) : 1e-3;
+    const double rate = static_cast<double>(iterations) / std::max(decades, 1e-3);
+    if (m_baseline < 0.0)
+        m_baseline = rate;
+    else if (rate > m_growth * m_baseline)
+        m_due = true;
+}
 
 namespace {
 
@@ -21,6 +38,8 @@ double seconds_since(Clock::time_point start)
 {
     return std::chrono::duration<double>(Clock::now() - start).count();
 }
+
+std::size_t at(Index i) { return static_cast<std::size_t>(i); }
 
 // PETSc for the whole process: initialised on first use, finalised at exit (which also
 // finalises MPI when PETSc was the one to initialise it).
@@ -63,33 +82,57 @@ void check(PetscErrorCode code, const char* what)
 }
 
 constexpr PetscInt BLOCK = 3;
-// GAMG's drop tolerance for weak couplings in the aggregation graph: keep every nonzero one
-// (bench_amg: 0.02 and 0.05 give the same iterations on the SOFA beam and no cheaper setup).
-constexpr PetscReal THRESHOLD = 0.0;
+
+// Where one 3×3 block lives in PETSc's scalar CSR: entry (i, j) at base + i·stride + j (every
+// scalar row of a block row holds the same block columns, three entries per block).
+struct ScalarBlock {
+    PetscInt base = 0;
+    PetscInt stride = 0;
+};
 
 } // namespace
 
 struct AmgPreconditioner::Impl {
-    // Pattern of the last setup, and for every scalar entry of the full matrix (CSR, row by
-    // row) the index of its value in the BsrMatrix values.
-    std::vector<Index> block_row_offsets;
-    std::vector<Index> block_columns;
+    AmgSettings settings;
+    HierarchyReuse reuse;
+    const SceneMatrix* scene = nullptr; // of the solve in progress
+    PreconditionerTimes times;
+
+    // The pattern PETSc's copy was built for.
+    std::vector<const BsrMatrix*> pattern_bodies;
+    std::vector<Index> pattern_body_blocks;
+    std::vector<std::uint64_t> pattern_coupling; // (row, column) of each coupling block
+
+    // PETSc's copy: the whole scene matrix in scalar CSR, and where every stored block of the
+    // bodies (its mirror below the diagonal too) and every coupling block goes in it.
     std::vector<PetscInt> row_offsets;
     std::vector<PetscInt> columns;
-    std::vector<std::size_t> source;
     std::vector<PetscScalar> values;
-    Mat matrix = nullptr;
+    std::vector<Index> body_block_offsets;  // #bodies+1: body b's blocks are [b], [b+1)
+    std::vector<ScalarBlock> upper_targets; // per body block
+    std::vector<ScalarBlock> mirror_targets; // per body block (off-diagonal ones)
+    std::vector<ScalarBlock> coupling_targets; // per coupling block
+    VecX positions; // #3N scene node positions of the last set-up
+    std::vector<Block3> diagonal_blocks; // #N scratch of scene_diagonal()
+    KSP fine_smoother = nullptr;         // the finest level's smoother (owned by pc)
+
+    Mat matrix = nullptr; // PETSc's copy (AIJ)
+    Mat fine = nullptr;   // the finest level's operator: a shell around the scene matrix
     PC pc = nullptr;
     Vec in = nullptr;
     Vec out = nullptr;
-    AmgTimes times;
 
+    explicit Impl(const AmgSettings& s) : settings(s), reuse(s.growth) {}
     ~Impl() { destroy(); }
+    Impl(const Impl&) = delete;
+    Impl& operator=(const Impl&) = delete;
 
     void destroy()
     {
         if (pc)
             PCDestroy(&pc);
+        if (fine)
+            MatDestroy(&fine);
         if (matrix)
             MatDestroy(&matrix);
         if (in)
@@ -98,89 +141,211 @@ struct AmgPreconditioner::Impl {
             VecDestroy(&out);
     }
 
-    bool same_pattern(const BsrMatrix& a) const
+    // The diagonal of the scene matrix (contact included) into d: the finest level's Jacobi.
+    static PetscErrorCode scene_diagonal(Mat shell, Vec d)
     {
-        return matrix != nullptr && a.row_offsets() == block_row_offsets && a.columns() == block_columns;
+        void* context = nullptr;
+        PetscErrorCode code = MatShellGetContext(shell, &context);
+        if (code)
+            return code;
+        Impl& impl = *static_cast<Impl*>(context);
+        PetscScalar* da = nullptr;
+        if ((code = VecGetArray(d, &da)))
+            return code;
+        try {
+            for_each_chunk(impl.scene->chunks(), [&](Index c, Index begin, Index end) {
+                Block3* blocks = impl.diagonal_blocks.data() + begin;
+                impl.scene->diagonal_blocks(c, blocks);
+                for (Index r = begin; r < end; ++r)
+                    for (int i = 0; i < 3; ++i)
+                        da[3 * r + i] = blocks[r - begin](i, i);
+            });
+        } catch (...) {
+            code = PETSC_ERR_LIB;
+        }
+        VecRestoreArray(d, &da);
+        return code;
     }
 
-    // The full scalar CSR pattern of `a` and where each value comes from.
-    void build_pattern(const BsrMatrix& a)
+    static PetscErrorCode multiply_scene(Mat shell, Vec x, Vec y)
     {
-        const Index n = a.num_block_rows();
-        const bool upper = a.is_symmetric_upper();
-        // Per block row: (column, block, transposed), the stored blocks and, in upper storage,
-        // the mirrors of blocks above.
-        std::vector<std::vector<std::array<Index, 3>>> rows(static_cast<std::size_t>(n));
-        const std::vector<Index>& offsets = a.row_offsets();
-        for (Index r = 0; r < n; ++r)
-            for (Index k = offsets[static_cast<std::size_t>(r)]; k < offsets[static_cast<std::size_t>(r) + 1]; ++k) {
-                const Index c = a.columns()[static_cast<std::size_t>(k)];
-                rows[static_cast<std::size_t>(r)].push_back({c, k, 0});
-                if (upper && c != r)
-                    rows[static_cast<std::size_t>(c)].push_back({r, k, 1});
+        void* context = nullptr;
+        PetscErrorCode code = MatShellGetContext(shell, &context);
+        if (code)
+            return code;
+        const Impl& impl = *static_cast<const Impl*>(context);
+        const PetscScalar* xa = nullptr;
+        PetscScalar* ya = nullptr;
+        if ((code = VecGetArrayRead(x, &xa)) || (code = VecGetArray(y, &ya)))
+            return code;
+        try {
+            impl.scene->multiply(xa, ya, nullptr);
+        } catch (...) {
+            code = PETSC_ERR_LIB;
+        }
+        VecRestoreArray(y, &ya);
+        VecRestoreArrayRead(x, &xa);
+        return code;
+    }
+
+    bool same_pattern(const SceneMatrix& a) const
+    {
+        if (matrix == nullptr || static_cast<Index>(pattern_bodies.size()) != a.num_bodies() ||
+            static_cast<Index>(pattern_coupling.size()) != a.coupling().size())
+            return false;
+        for (Index b = 0; b < a.num_bodies(); ++b)
+            if (pattern_bodies[at(b)] != &a.body_matrix(b) || pattern_body_blocks[at(b)] != a.body_matrix(b).num_blocks())
+                return false;
+        for (Index k = 0; k < a.coupling().size(); ++k)
+            if (pattern_coupling[at(k)] != key(a.coupling().block(k).row, a.coupling().block(k).column))
+                return false;
+        return true;
+    }
+
+    static std::uint64_t key(Index row, Index column)
+    {
+        return (static_cast<std::uint64_t>(static_cast<std::uint32_t>(row)) << 32) | static_cast<std::uint32_t>(column);
+    }
+
+    // Builds the scalar CSR pattern of `a` and the targets of its blocks.
+    void build_pattern(const SceneMatrix& a)
+    {
+        enum Kind : Index { UPPER, MIRROR, COUPLING };
+        struct Source {
+            Index column, kind, index; // index: scene-wide body block, or coupling block
+            bool operator<(const Source& o) const
+            {
+                return std::tie(column, kind, index) < std::tie(o.column, o.kind, o.index);
             }
+        };
+        const Index n = a.num_block_rows();
+        body_block_offsets.assign(1, 0);
+        for (Index b = 0; b < a.num_bodies(); ++b)
+            body_block_offsets.push_back(body_block_offsets.back() + a.body_matrix(b).num_blocks());
+
+        // Sources per block row, counted then filled (CSR).
+        std::vector<Index> offsets(at(n) + 1, 0);
+        for (Index b = 0; b < a.num_bodies(); ++b) {
+            const BsrMatrix& m = a.body_matrix(b);
+            const Index shift = a.offset(b);
+            for (Index r = 0; r < m.num_block_rows(); ++r)
+                for (Index k = m.row_offsets()[at(r)]; k < m.row_offsets()[at(r) + 1]; ++k) {
+                    ++offsets[at(shift + r) + 1];
+                    if (m.columns()[at(k)] != r)
+                        ++offsets[at(shift + m.columns()[at(k)]) + 1];
+                }
+        }
+        for (Index k = 0; k < a.coupling().size(); ++k)
+            ++offsets[at(a.coupling().block(k).row) + 1];
+        for (std::size_t r = 0; r < at(n); ++r)
+            offsets[r + 1] += offsets[r];
+        std::vector<Source> sources(at(offsets.back()));
+        std::vector<Index> fill(offsets.begin(), offsets.end() - 1);
+        for (Index b = 0; b < a.num_bodies(); ++b) {
+            const BsrMatrix& m = a.body_matrix(b);
+            const Index shift = a.offset(b);
+            for (Index r = 0; r < m.num_block_rows(); ++r)
+                for (Index k = m.row_offsets()[at(r)]; k < m.row_offsets()[at(r) + 1]; ++k) {
+                    const Index c = m.columns()[at(k)], g = body_block_offsets[at(b)] + k;
+                    sources[at(fill[at(shift + r)]++)] = {shift + c, UPPER, g};
+                    if (c != r)
+                        sources[at(fill[at(shift + c)]++)] = {shift + r, MIRROR, g};
+                }
+        }
+        for (Index k = 0; k < a.coupling().size(); ++k) {
+            const CouplingBlocks::Entry& e = a.coupling().block(k);
+            sources[at(fill[at(e.row)]++)] = {e.column, COUPLING, k};
+        }
+
+        upper_targets.assign(at(body_block_offsets.back()), {});
+        mirror_targets.assign(at(body_block_offsets.back()), {});
+        coupling_targets.assign(at(a.coupling().size()), {});
         row_offsets.assign(1, 0);
         columns.clear();
-        source.clear();
+        std::vector<Index> row_columns;
         for (Index r = 0; r < n; ++r) {
-            auto& row = rows[static_cast<std::size_t>(r)];
-            std::sort(row.begin(), row.end());
+            const auto first = sources.begin() + offsets[at(r)], last = sources.begin() + offsets[at(r) + 1];
+            std::sort(first, last);
+            row_columns.clear();
+            for (auto s = first; s != last; ++s)
+                if (row_columns.empty() || row_columns.back() != s->column)
+                    row_columns.push_back(s->column);
+            const auto row_start = static_cast<PetscInt>(columns.size());
+            const auto stride = static_cast<PetscInt>(3 * row_columns.size());
+            Index position = -1;
+            Index previous = -1;
+            for (auto s = first; s != last; ++s) {
+                if (s->column != previous) {
+                    ++position;
+                    previous = s->column;
+                }
+                const ScalarBlock target{row_start + 3 * static_cast<PetscInt>(position), stride};
+                if (s->kind == UPPER)
+                    upper_targets[at(s->index)] = target;
+                else if (s->kind == MIRROR)
+                    mirror_targets[at(s->index)] = target;
+                else
+                    coupling_targets[at(s->index)] = target;
+            }
             for (int i = 0; i < 3; ++i) {
-                for (const auto& [c, k, transposed] : row)
-                    for (int j = 0; j < 3; ++j) {
+                for (const Index c : row_columns)
+                    for (int j = 0; j < 3; ++j)
                         columns.push_back(static_cast<PetscInt>(3 * c + j));
-                        source.push_back(9 * static_cast<std::size_t>(k) +
-                                         static_cast<std::size_t>(transposed ? 3 * j + i : 3 * i + j));
-                    }
                 row_offsets.push_back(static_cast<PetscInt>(columns.size()));
             }
         }
-        block_row_offsets = a.row_offsets();
-        block_columns = a.columns();
-        values.resize(columns.size());
+        values.assign(columns.size(), 0.0);
+
+        pattern_bodies.clear();
+        pattern_body_blocks.clear();
+        for (Index b = 0; b < a.num_bodies(); ++b) {
+            pattern_bodies.push_back(&a.body_matrix(b));
+            pattern_body_blocks.push_back(a.body_matrix(b).num_blocks());
+        }
+        pattern_coupling.clear();
+        for (Index k = 0; k < a.coupling().size(); ++k)
+            pattern_coupling.push_back(key(a.coupling().block(k).row, a.coupling().block(k).column));
     }
 
-    void fill_values(const BsrMatrix& a)
+    void add(const ScalarBlock& target, const Block3& value, bool transposed)
     {
-        const std::vector<double>& bsr = a.values();
-        for (std::size_t e = 0; e < source.size(); ++e)
-            values[e] = bsr[source[e]];
+        for (int i = 0; i < 3; ++i)
+            for (int j = 0; j < 3; ++j)
+                values[at(static_cast<Index>(target.base + i * target.stride + j))] +=
+                    transposed ? value(j, i) : value(i, j);
     }
 
-    void create(const BsrMatrix& a)
+    void fill_values(const SceneMatrix& a)
     {
-        destroy();
-        build_pattern(a);
-        fill_values(a);
-        const auto n = static_cast<PetscInt>(a.num_dofs());
-        check(MatCreate(PETSC_COMM_SELF, &matrix), "MatCreate");
-        check(MatSetSizes(matrix, n, n, n, n), "MatSetSizes");
-        check(MatSetBlockSize(matrix, BLOCK), "MatSetBlockSize");
-        check(MatSetType(matrix, MATSEQAIJ), "MatSetType");
-        check(MatSeqAIJSetPreallocationCSR(matrix, row_offsets.data(), columns.data(), values.data()),
-              "MatSeqAIJSetPreallocationCSR");
-        check(VecCreateSeqWithArray(PETSC_COMM_SELF, BLOCK, n, nullptr, &in), "VecCreateSeqWithArray");
-        check(VecCreateSeqWithArray(PETSC_COMM_SELF, BLOCK, n, nullptr, &out), "VecCreateSeqWithArray");
-        check(PCCreate(PETSC_COMM_SELF, &pc), "PCCreate");
-        check(PCSetType(pc, PCGAMG), "PCSetType");
-        PetscReal threshold = THRESHOLD;
-        check(PCGAMGSetThreshold(pc, &threshold, 1), "PCGAMGSetThreshold");
-        // GAMG's defaults are completed by PCSetFromOptions (without it the smoothers differ and
-        // the setup costs four times as much); the prefix keeps other options out of it.
-        check(PCSetOptionsPrefix(pc, "corocontact_amg_"), "PCSetOptionsPrefix");
-        check(PCSetFromOptions(pc), "PCSetFromOptions");
+        std::fill(values.begin(), values.end(), 0.0);
+        for (Index b = 0; b < a.num_bodies(); ++b) {
+            const BsrMatrix& m = a.body_matrix(b);
+            for (Index r = 0; r < m.num_block_rows(); ++r)
+                for (Index k = m.row_offsets()[at(r)]; k < m.row_offsets()[at(r) + 1]; ++k) {
+                    const Index g = body_block_offsets[at(b)] + k;
+                    const Block3 value = m.block(k);
+                    add(upper_targets[at(g)], value, false);
+                    if (m.columns()[at(k)] != r)
+                        add(mirror_targets[at(g)], value, true);
+                }
+        }
+        for (Index k = 0; k < a.coupling().size(); ++k)
+            add(coupling_targets[at(k)], a.coupling().block(k).value, false);
     }
 
-    void refill(const BsrMatrix& a)
+    void gather_positions(const SceneMatrix& a)
     {
-        fill_values(a);
-        PetscScalar* data = nullptr;
-        check(MatSeqAIJGetArray(matrix, &data), "MatSeqAIJGetArray");
-        std::copy(values.begin(), values.end(), data);
-        check(MatSeqAIJRestoreArray(matrix, &data), "MatSeqAIJRestoreArray");
+        positions.resize(a.num_dofs());
+        for (Index b = 0; b < a.num_bodies(); ++b) {
+            const VecX* p = a.node_positions(b);
+            if (!p)
+                throw std::invalid_argument("AmgPreconditioner: the scene matrix has no node positions "
+                                            "(SceneMatrix::set_node_positions)");
+            positions.segment(3 * a.offset(b), p->size()) = *p;
+        }
     }
 
-    void set_near_null_space(CRef<VecX> positions)
+    void set_near_null_space()
     {
         Vec coordinates = nullptr;
         check(VecCreateSeqWithArray(PETSC_COMM_SELF, BLOCK, static_cast<PetscInt>(positions.size()), positions.data(),
@@ -194,49 +359,119 @@ struct AmgPreconditioner::Impl {
         MatNullSpaceDestroy(&space);
         check(set, "MatSetNearNullSpace");
     }
+
+    void setup(const SceneMatrix& a)
+    {
+        gather_positions(a);
+        destroy();
+        build_pattern(a);
+        fill_values(a);
+        const auto n = static_cast<PetscInt>(a.num_dofs());
+        check(MatCreate(PETSC_COMM_SELF, &matrix), "MatCreate");
+        check(MatSetSizes(matrix, n, n, n, n), "MatSetSizes");
+        check(MatSetBlockSize(matrix, BLOCK), "MatSetBlockSize");
+        check(MatSetType(matrix, MATSEQAIJ), "MatSetType");
+        check(MatSeqAIJSetPreallocationCSR(matrix, row_offsets.data(), columns.data(), values.data()),
+              "MatSeqAIJSetPreallocationCSR");
+        set_near_null_space();
+        if (settings.scene_fine_level) {
+            check(MatCreateShell(PETSC_COMM_SELF, n, n, n, n, this, &fine), "MatCreateShell");
+            check(MatShellSetOperation(fine, MATOP_MULT, reinterpret_cast<void (*)(void)>(&multiply_scene)),
+                  "MatShellSetOperation");
+            check(MatShellSetOperation(fine, MATOP_GET_DIAGONAL, reinterpret_cast<void (*)(void)>(&scene_diagonal)),
+                  "MatShellSetOperation");
+            diagonal_blocks.resize(at(a.num_block_rows()));
+            check(MatSetBlockSize(fine, BLOCK), "MatSetBlockSize");
+        }
+        check(VecCreateSeqWithArray(PETSC_COMM_SELF, BLOCK, n, nullptr, &in), "VecCreateSeqWithArray");
+        check(VecCreateSeqWithArray(PETSC_COMM_SELF, BLOCK, n, nullptr, &out), "VecCreateSeqWithArray");
+        check(PCCreate(PETSC_COMM_SELF, &pc), "PCCreate");
+        check(PCSetType(pc, PCGAMG), "PCSetType");
+        PetscReal threshold = settings.threshold;
+        check(PCGAMGSetThreshold(pc, &threshold, 1), "PCGAMGSetThreshold");
+        check(PCGAMGSetNSmooths(pc, settings.aggregation_smoothing), "PCGAMGSetNSmooths");
+        // GAMG's defaults are completed by PCSetFromOptions (without it the smoothers differ and
+        // the setup costs four times as much); the prefix keeps other options out of it.
+        check(PCSetOptionsPrefix(pc, "corocontact_amg_"), "PCSetOptionsPrefix");
+        check(PCSetFromOptions(pc), "PCSetFromOptions");
+        check(PCSetOperators(pc, fine ? fine : matrix, matrix), "PCSetOperators");
+        check(PCSetUseAmat(pc, PETSC_TRUE), "PCSetUseAmat");
+        check(PCSetUp(pc), "PCSetUp (GAMG hierarchy)");
+        PetscInt levels = 0;
+        check(PCMGGetLevels(pc, &levels), "PCMGGetLevels");
+        for (PetscInt level = 1; level < levels; ++level) { // level 0 is the coarsest (a direct solve)
+            KSP smoother = nullptr;
+            check(PCMGGetSmoother(pc, level, &smoother), "PCMGGetSmoother");
+            const int degree = level + 1 == levels ? settings.fine_degree : settings.coarse_degree;
+            check(KSPSetTolerances(smoother, PETSC_DEFAULT, PETSC_DEFAULT, PETSC_DEFAULT, degree), "KSPSetTolerances");
+        }
+        fine_smoother = nullptr;
+        if (fine && levels > 1) {
+            // The finest smoother's Jacobi takes the scene's own diagonal, renewed before every
+            // solve (refresh_fine_level): new contact terms are on it from the first solve on.
+            check(PCMGGetSmoother(pc, levels - 1, &fine_smoother), "PCMGGetSmoother");
+            check(KSPSetOperators(fine_smoother, fine, fine), "KSPSetOperators");
+        }
+    }
+
+    // Before a solve with the kept hierarchy: the finest smoother's Jacobi from the current
+    // diagonal (assembling the shell raises its state, so PETSc sets the Jacobi up anew).
+    void refresh_fine_level()
+    {
+        if (!fine_smoother)
+            return;
+        check(MatAssemblyBegin(fine, MAT_FINAL_ASSEMBLY), "MatAssemblyBegin");
+        check(MatAssemblyEnd(fine, MAT_FINAL_ASSEMBLY), "MatAssemblyEnd");
+        PC jacobi = nullptr;
+        check(KSPGetPC(fine_smoother, &jacobi), "KSPGetPC");
+        check(PCSetUp(jacobi), "PCSetUp (finest level Jacobi)");
+    }
 };
 
-AmgPreconditioner::AmgPreconditioner() : m_impl(std::make_unique<Impl>()) {}
-AmgPreconditioner::~AmgPreconditioner() = default;
-AmgPreconditioner::AmgPreconditioner(AmgPreconditioner&&) noexcept = default;
-AmgPreconditioner& AmgPreconditioner::operator=(AmgPreconditioner&&) noexcept = default;
-
-bool AmgPreconditioner::ready() const { return m_impl && m_impl->pc != nullptr && m_impl->times.setups > 0; }
-
-const AmgTimes& AmgPreconditioner::times() const { return m_impl->times; }
-
-void AmgPreconditioner::setup(const BsrMatrix& a, CRef<VecX> positions)
+AmgPreconditioner::AmgPreconditioner(const AmgSettings& settings) : m_impl(std::make_unique<Impl>(settings))
 {
-    if (positions.size() != a.num_dofs())
-        throw std::invalid_argument("AmgPreconditioner::setup: " + std::to_string(positions.size()) +
-                                    " position values for a matrix of " + std::to_string(a.num_dofs()) + " DOFs");
+    if (!(settings.growth > 1.0) || settings.fine_degree < 1 || settings.coarse_degree < 1 ||
+        settings.aggregation_smoothing < 0 || !(settings.threshold >= 0.0))
+        throw std::invalid_argument("AmgPreconditioner: growth must exceed 1, the smoother degrees be ≥ 1, "
+                                    "aggregation_smoothing and threshold ≥ 0");
+}
+
+AmgPreconditioner::~AmgPreconditioner() = default;
+
+PreconditionerTimes AmgPreconditioner::times() const { return m_impl->times; }
+
+void AmgPreconditioner::request_setup() { m_impl->reuse = HierarchyReuse(m_impl->settings.growth); }
+
+void AmgPreconditioner::record_solve(Index iterations, double reduction)
+{
+    m_impl->reuse.record_solve(iterations, reduction);
+}
+
+void AmgPreconditioner::prepare(const SceneMatrix& a)
+{
+    Impl& impl = *m_impl;
+    impl.scene = &a;
+    const bool rows_changed = impl.matrix == nullptr || static_cast<Index>(impl.positions.size()) != a.num_dofs();
+    if (!impl.reuse.setup_due() && !rows_changed) {
+        impl.refresh_fine_level();
+        return;
+    }
     PetscSession::ensure();
     const auto start = Clock::now();
-    Impl& impl = *m_impl;
-    if (impl.same_pattern(a))
-        impl.refill(a);
-    else
-        impl.create(a);
-    impl.set_near_null_space(positions);
-    check(PCSetOperators(impl.pc, impl.matrix, impl.matrix), "PCSetOperators");
-    check(PCSetUp(impl.pc), "PCSetUp (GAMG hierarchy)");
+    impl.setup(a);
+    impl.reuse.record_setup();
     impl.times.setup_s += seconds_since(start);
     ++impl.times.setups;
 }
 
-void AmgPreconditioner::apply(CRef<VecX> r, Eigen::Ref<VecX> z)
+void AmgPreconditioner::apply(const double* r, double* z)
 {
     Impl& impl = *m_impl;
-    if (!ready())
-        throw std::logic_error("AmgPreconditioner::apply before setup");
-    const auto dofs = static_cast<Eigen::Index>(impl.row_offsets.size() - 1);
-    if (r.size() != dofs || z.size() != r.size())
-        throw std::invalid_argument("AmgPreconditioner::apply: vectors of " + std::to_string(r.size()) + " and " +
-                                    std::to_string(z.size()) + " values for " +
-                                    std::to_string(impl.row_offsets.size() - 1) + " DOFs");
+    if (impl.pc == nullptr)
+        throw std::logic_error("AmgPreconditioner::apply before prepare");
     const auto start = Clock::now();
-    check(VecPlaceArray(impl.in, r.data()), "VecPlaceArray");
-    check(VecPlaceArray(impl.out, z.data()), "VecPlaceArray");
+    check(VecPlaceArray(impl.in, r), "VecPlaceArray");
+    check(VecPlaceArray(impl.out, z), "VecPlaceArray");
     const PetscErrorCode code = PCApply(impl.pc, impl.in, impl.out);
     VecResetArray(impl.in);
     VecResetArray(impl.out);

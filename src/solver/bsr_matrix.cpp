@@ -20,13 +20,17 @@ constexpr Index DEFAULT_CHUNK_ROWS = 1024; // upper storage without given chunks
 std::size_t at(Index i) { return static_cast<std::size_t>(i); }
 
 // y_r = Σ_k A_rk x_k for block rows [begin, end), each row summed in pattern order.
-inline void multiply_rows(const double* values, const Index* columns, const Index* offsets, const double* xd,
-                          double* yd, Index begin, Index end)
+template <class Value>
+void multiply_rows(const Value* values, const Index* columns, const Index* offsets, const double* xd, double* yd,
+                   Index begin, Index end)
 {
     for (Index r = begin; r != end; ++r) {
         double y0 = 0.0, y1 = 0.0, y2 = 0.0;
         for (Index k = offsets[r]; k < offsets[r + 1]; ++k) {
-            const double* a = values + 9 * static_cast<std::ptrdiff_t>(k);
+            const Value* v = values + 9 * static_cast<std::ptrdiff_t>(k);
+            double a[9];
+            for (int i = 0; i < 9; ++i)
+                a[i] = static_cast<double>(v[i]);
             const double* xc = xd + 3 * static_cast<std::ptrdiff_t>(columns[k]);
             y0 += a[0] * xc[0] + a[1] * xc[1] + a[2] * xc[2];
             y1 += a[3] * xc[0] + a[4] * xc[1] + a[5] * xc[2];
@@ -39,17 +43,25 @@ inline void multiply_rows(const double* values, const Index* columns, const Inde
 }
 } // namespace
 
-BsrMatrix::BsrMatrix(std::vector<Index> row_offsets, std::vector<Index> columns)
-    : m_row_offsets(std::move(row_offsets)), m_columns(std::move(columns))
+BsrMatrix::BsrMatrix(std::vector<Index> row_offsets, std::vector<Index> columns, MatrixPrecision precision)
+    : m_row_offsets(std::move(row_offsets)), m_columns(std::move(columns)), m_precision(precision)
 {
     check_pattern(false);
-    m_values.assign(9 * m_columns.size(), 0.0);
+    allocate_values();
+}
+
+void BsrMatrix::allocate_values()
+{
+    const std::size_t count = 9 * m_columns.size();
+    m_values.assign(m_precision == MatrixPrecision::DOUBLE ? count : 0, 0.0);
+    m_single_values.assign(m_precision == MatrixPrecision::SINGLE ? count : 0, 0.0f);
 }
 
 BsrMatrix BsrMatrix::symmetric_upper(std::vector<Index> row_offsets, std::vector<Index> columns,
-                                     std::vector<Index> chunk_offsets)
+                                     std::vector<Index> chunk_offsets, MatrixPrecision precision)
 {
     BsrMatrix a;
+    a.m_precision = precision;
     a.m_row_offsets = std::move(row_offsets);
     a.m_columns = std::move(columns);
     a.check_pattern(true);
@@ -82,7 +94,7 @@ BsrMatrix BsrMatrix::symmetric_upper(std::vector<Index> row_offsets, std::vector
         for (Index k = a.m_row_offsets[at(r)]; k < a.m_row_offsets[at(r) + 1]; ++k)
             if (a.m_columns[at(k)] >= chunk_end[at(r)])
                 a.m_gather_blocks[at(fill[at(a.m_columns[at(k)])]++)] = {k, r};
-    a.m_values.assign(9 * a.m_columns.size(), 0.0);
+    a.allocate_values();
     return a;
 }
 
@@ -127,23 +139,51 @@ void BsrMatrix::add_symmetric_part(Index row, Index column, const Mat3& value)
     if (k < 0)
         throw std::invalid_argument("BsrMatrix: block (" + std::to_string(row) + ", " + std::to_string(column) +
                                     ") is not in the pattern");
-    block(k) += value;
+    add_to_block(k, value);
 }
+
+const Block3 BsrMatrix::block(Index k) const
+{
+    if (m_precision == MatrixPrecision::DOUBLE)
+        return Eigen::Map<const Block3>(m_values.data() + 9 * static_cast<std::ptrdiff_t>(k));
+    return Eigen::Map<const Eigen::Matrix<float, 3, 3, Eigen::RowMajor>>(m_single_values.data() +
+                                                                         9 * static_cast<std::ptrdiff_t>(k))
+        .cast<double>();
+}
+
+void BsrMatrix::set_block(Index k, const Block3& value)
+{
+    if (m_precision == MatrixPrecision::DOUBLE)
+        Eigen::Map<Block3>(m_values.data() + 9 * static_cast<std::ptrdiff_t>(k)) = value;
+    else
+        Eigen::Map<Eigen::Matrix<float, 3, 3, Eigen::RowMajor>>(m_single_values.data() +
+                                                                9 * static_cast<std::ptrdiff_t>(k)) =
+            value.cast<float>();
+}
+
+void BsrMatrix::add_to_block(Index k, const Block3& value) { set_block(k, block(k) + value); }
 
 void BsrMatrix::multiply_chunk(Index chunk, const double* xd, double* yd) const
 {
     const Index begin = m_chunk_offsets[at(chunk)], end = m_chunk_offsets[at(chunk) + 1];
     std::fill(yd + 3 * static_cast<std::ptrdiff_t>(begin), yd + 3 * static_cast<std::ptrdiff_t>(end), 0.0);
-    detail::upper_chunk_rows(m_values.data(), m_columns.data(), m_row_offsets.data(), xd, yd, begin, end);
+    if (m_precision == MatrixPrecision::DOUBLE)
+        detail::upper_chunk_rows(m_values.data(), m_columns.data(), m_row_offsets.data(), xd, yd, begin, end);
+    else
+        detail::upper_chunk_rows(m_single_values.data(), m_columns.data(), m_row_offsets.data(), xd, yd, begin, end);
 }
 
 void BsrMatrix::gather_chunk(Index chunk, const double* xd, double* yd) const
 {
     for (Index row = m_chunk_offsets[at(chunk)]; row < m_chunk_offsets[at(chunk) + 1]; ++row) {
         const Index first = m_gather_offsets[at(row)], last = m_gather_offsets[at(row) + 1];
-        if (first != last)
-            detail::gather_row(m_values.data(), m_gather_blocks.data(), first, last, xd,
-                               yd + 3 * static_cast<std::ptrdiff_t>(row));
+        if (first == last)
+            continue;
+        double* y_row = yd + 3 * static_cast<std::ptrdiff_t>(row);
+        if (m_precision == MatrixPrecision::DOUBLE)
+            detail::gather_row(m_values.data(), m_gather_blocks.data(), first, last, xd, y_row);
+        else
+            detail::gather_row(m_single_values.data(), m_gather_blocks.data(), first, last, xd, y_row);
     }
 }
 
@@ -168,28 +208,43 @@ void BsrMatrix::multiply(CRef<VecX> x, Eigen::Ref<VecX> y) const
     }
     tbb::parallel_for(tbb::blocked_range<Index>(0, num_block_rows(), SPMV_GRAIN),
                       [&](const tbb::blocked_range<Index>& range) {
-                          multiply_rows(m_values.data(), m_columns.data(), m_row_offsets.data(), x.data(), y.data(),
-                                        range.begin(), range.end());
+                          if (m_precision == MatrixPrecision::DOUBLE)
+                              multiply_rows(m_values.data(), m_columns.data(), m_row_offsets.data(), x.data(),
+                                            y.data(), range.begin(), range.end());
+                          else
+                              multiply_rows(m_single_values.data(), m_columns.data(), m_row_offsets.data(), x.data(),
+                                            y.data(), range.begin(), range.end());
                       });
 }
 
 SparseMat BsrMatrix::to_sparse() const
 {
     std::vector<Eigen::Triplet<double, Index>> triplets;
-    triplets.reserve(2 * m_values.size());
+    triplets.reserve(18 * m_columns.size());
     for (Index r = 0; r < num_block_rows(); ++r)
         for (Index k = m_row_offsets[at(r)]; k < m_row_offsets[at(r) + 1]; ++k) {
             const Index c = m_columns[at(k)];
+            const Block3 value = block(k);
             for (int a = 0; a < 3; ++a)
                 for (int b = 0; b < 3; ++b) {
-                    triplets.emplace_back(3 * r + a, 3 * c + b, block(k)(a, b));
+                    triplets.emplace_back(3 * r + a, 3 * c + b, value(a, b));
                     if (is_symmetric_upper() && c != r)
-                        triplets.emplace_back(3 * c + b, 3 * r + a, block(k)(a, b));
+                        triplets.emplace_back(3 * c + b, 3 * r + a, value(a, b));
                 }
         }
     SparseMat sparse(num_dofs(), num_dofs());
     sparse.setFromTriplets(triplets.begin(), triplets.end());
     return sparse;
+}
+
+BsrMatrix BsrMatrix::with_precision(MatrixPrecision precision) const
+{
+    BsrMatrix copy = *this;
+    copy.m_precision = precision;
+    copy.allocate_values();
+    for (Index k = 0; k < num_blocks(); ++k)
+        copy.set_block(k, block(k));
+    return copy;
 }
 
 BsrMatrix BsrMatrix::to_general() const
@@ -211,13 +266,13 @@ BsrMatrix BsrMatrix::to_general() const
                        m_columns.begin() + m_row_offsets[at(r) + 1]);
         offsets.push_back(static_cast<Index>(columns.size()));
     }
-    BsrMatrix general(std::move(offsets), std::move(columns));
+    BsrMatrix general(std::move(offsets), std::move(columns), m_precision);
     Index out = 0;
     for (Index r = 0; r < n; ++r) {
         for (const auto& [c, k] : lower[at(r)])
-            general.block(out++) = block(k).transpose();
+            general.set_block(out++, block(k).transpose());
         for (Index k = m_row_offsets[at(r)]; k < m_row_offsets[at(r) + 1]; ++k)
-            general.block(out++) = block(k);
+            general.set_block(out++, block(k));
     }
     return general;
 }

@@ -2,8 +2,6 @@
 
 #include <corocontact/core/error.hpp>
 
-#include <Eigen/LU>
-
 #include <algorithm>
 #include <cmath>
 
@@ -11,25 +9,25 @@ namespace coro {
 
 namespace {
 std::size_t at(Index i) { return static_cast<std::size_t>(i); }
+
+/// A component stops at ‖r‖ ≤ max(tolerance, RESIDUAL_FLOOR)·‖b‖. Below the floor the recursive
+/// residual is far under what double precision resolves in x, and its squares head for
+/// underflow, where pᵀAp would read 0 and look like a matrix that is not positive definite.
+constexpr double RESIDUAL_FLOOR = 1e-30;
 } // namespace
 
-void PcgSolver::build_preconditioner(const SceneMatrix& a, PcgPreconditioner kind)
+void PcgSolver::prepare_preconditioner(const SceneMatrix& a, const PcgSettings& settings)
 {
-    m_kind = kind;
-    m_inverse_blocks.resize(at(a.num_block_rows()));
-    if (kind == PcgPreconditioner::JACOBI)
-        m_inverse_diagonal.resize(a.num_dofs());
-    for_each_chunk(a.chunks(), [&](Index c, Index begin, Index end) {
-        Block3* blocks = m_inverse_blocks.data() + begin;
-        a.diagonal_blocks(c, blocks);
-        for (Index r = begin; r < end; ++r) {
-            Block3& d = m_inverse_blocks[at(r)];
-            if (kind == PcgPreconditioner::BLOCK_JACOBI)
-                d = d.inverse().eval();
-            else
-                m_inverse_diagonal.segment<3>(3 * r) = d.diagonal().cwiseInverse();
-        }
-    });
+    if (!m_preconditioner || settings.preconditioner != m_kind) {
+        m_preconditioner = make_preconditioner(settings.preconditioner, settings.amg);
+        m_kind = settings.preconditioner;
+    }
+    m_preconditioner->prepare(a);
+}
+
+PreconditionerTimes PcgSolver::preconditioner_times() const
+{
+    return m_preconditioner ? m_preconditioner->times() : PreconditionerTimes{};
 }
 
 void PcgSolver::sum_by_component(const SceneMatrix& a, const std::vector<double>& partials, int width, bool all)
@@ -68,8 +66,17 @@ void PcgSolver::residual_pass(const SceneMatrix& a, const double* b, double* x)
     double* z = m_z.data();
     const double* p = m_p.data();
     const double* q = m_q.data();
-    const double* inv_diag = m_inverse_diagonal.data();
-    const bool block = m_kind == PcgPreconditioner::BLOCK_JACOBI;
+    Preconditioner& preconditioner = *m_preconditioner;
+    const bool local = preconditioner.is_chunk_local();
+    const auto chunk_sums = [&](Index c, std::ptrdiff_t begin, std::ptrdiff_t end) {
+        double rr = 0.0, rz = 0.0;
+        for (std::ptrdiff_t i = begin; i < end; ++i) {
+            rr += r[i] * r[i];
+            rz += r[i] * z[i];
+        }
+        m_partials[2 * at(c)] = rr;
+        m_partials[2 * at(c) + 1] = rz;
+    };
     for_each_chunk(a.chunks(), [&](Index c, Index row_begin, Index row_end) {
         if (!m_chunk_active[at(c)])
             return;
@@ -85,20 +92,19 @@ void PcgSolver::residual_pass(const SceneMatrix& a, const double* b, double* x)
                 r[i] -= alpha * q[i];
             }
         }
-        if (block) {
-            for (Index v = row_begin; v != row_end; ++v)
-                Eigen::Map<Vec3>(z + 3 * v) = m_inverse_blocks[at(v)] * Eigen::Map<const Vec3>(r + 3 * v);
-        } else {
-            for (std::ptrdiff_t i = begin; i < end; ++i)
-                z[i] = inv_diag[i] * r[i];
-        }
-        double rr = 0.0, rz = 0.0;
-        for (std::ptrdiff_t i = begin; i < end; ++i) {
-            rr += r[i] * r[i];
-            rz += r[i] * z[i];
-        }
-        m_partials[2 * at(c)] = rr;
-        m_partials[2 * at(c) + 1] = rz;
+        if (!local)
+            return;
+        preconditioner.apply_rows(row_begin, row_end, r, z);
+        chunk_sums(c, begin, end);
+    });
+    if (local)
+        return;
+    // Block diagonal by component: z of a stopped component is rewritten from its unchanged r
+    // and never read.
+    preconditioner.apply(r, z);
+    for_each_chunk(a.chunks(), [&](Index c, Index row_begin, Index row_end) {
+        if (m_chunk_active[at(c)])
+            chunk_sums(c, 3 * static_cast<std::ptrdiff_t>(row_begin), 3 * static_cast<std::ptrdiff_t>(row_end));
     });
 }
 
@@ -126,6 +132,7 @@ PcgResult PcgSolver::solve(const SceneMatrix& a, CRef<VecX> b, Eigen::Ref<VecX> 
 {
     const Index n = a.num_dofs();
     CORO_ASSERT(b.size() == n && x.size() == n);
+    const double stop = std::max(settings.tolerance, RESIDUAL_FLOOR);
     const RowChunks& chunks = a.chunks();
     m_r.resize(n);
     m_z.resize(n);
@@ -134,6 +141,10 @@ PcgResult PcgSolver::solve(const SceneMatrix& a, CRef<VecX> b, Eigen::Ref<VecX> 
     m_q.resize(n);
     m_partials.resize(2 * at(chunks.num_chunks()));
     m_chunk_active.assign(at(chunks.num_chunks()), 1);
+    // Components come and go with contact, never more than one per body: room for that many
+    // keeps a solve free of allocations when they change.
+    m_components.reserve(at(a.num_bodies()));
+    m_totals.reserve(2 * at(a.num_bodies()));
     m_components.assign(at(a.num_components()), Component{});
 
     // ‖b_k‖ per component; a component with b_k = 0 has the solution 0 and takes no iteration.
@@ -157,7 +168,7 @@ PcgResult PcgSolver::solve(const SceneMatrix& a, CRef<VecX> b, Eigen::Ref<VecX> 
                 x.segment(3 * begin, 3 * (end - begin)).setZero();
         });
     }
-    build_preconditioner(a, settings.preconditioner);
+    prepare_preconditioner(a, settings);
 
     // r = b − A x, z = M⁻¹ r, p = z.
     mark_active_chunks(a);
@@ -173,8 +184,9 @@ PcgResult PcgSolver::solve(const SceneMatrix& a, CRef<VecX> b, Eigen::Ref<VecX> 
         CORO_CHECK(std::isfinite(rr) && std::isfinite(rz), NumericalError,
                    "PCG: the initial residual is not finite (rᵀr = " << rr << ", rᵀz = " << rz << ")");
         component.r_norm = std::sqrt(rr);
+        component.initial_r_norm = component.r_norm;
         component.rz = rz;
-        component.active = component.r_norm > settings.tolerance * component.b_norm && settings.max_iterations > 0;
+        component.active = component.r_norm > stop * component.b_norm && settings.max_iterations > 0;
     }
     m_p.head(n) = m_z;
 
@@ -205,7 +217,7 @@ PcgResult PcgSolver::solve(const SceneMatrix& a, CRef<VecX> b, Eigen::Ref<VecX> 
                        "PCG: the residual is not finite at iteration " << component.iterations);
             ++component.iterations;
             component.r_norm = std::sqrt(rr);
-            if (component.r_norm <= settings.tolerance * component.b_norm ||
+            if (component.r_norm <= stop * component.b_norm ||
                 component.iterations >= settings.max_iterations) {
                 component.active = false;
                 continue;
@@ -223,8 +235,13 @@ PcgResult PcgSolver::solve(const SceneMatrix& a, CRef<VecX> b, Eigen::Ref<VecX> 
         const double residual = component.b_norm > 0.0 ? component.r_norm / component.b_norm : 0.0;
         result.iterations = std::max(result.iterations, component.iterations);
         result.residual = std::max(result.residual, residual);
-        result.converged = result.converged && residual <= settings.tolerance;
+        result.converged = result.converged && residual <= stop;
     }
+    // The hierarchy's quality is judged by the component that ran longest.
+    const auto slowest = std::max_element(m_components.begin(), m_components.end(),
+                                          [](const Component& l, const Component& r) { return l.iterations < r.iterations; });
+    if (slowest != m_components.end() && slowest->initial_r_norm > 0.0)
+        m_preconditioner->record_solve(slowest->iterations, slowest->r_norm / slowest->initial_r_norm);
     return result;
 }
 

@@ -34,6 +34,19 @@ SceneMatrix::SceneMatrix(std::vector<const BsrMatrix*> bodies) : m_bodies(std::m
     m_num_components = num_bodies();
 }
 
+void SceneMatrix::set_node_positions(std::vector<const VecX*> positions)
+{
+    if (positions.size() != m_bodies.size())
+        throw std::invalid_argument("SceneMatrix::set_node_positions: " + std::to_string(positions.size()) +
+                                    " position vectors for " + std::to_string(m_bodies.size()) + " bodies");
+    for (std::size_t b = 0; b < positions.size(); ++b)
+        if (!positions[b] || positions[b]->size() != m_bodies[b]->num_dofs())
+            throw std::invalid_argument("SceneMatrix::set_node_positions: body " + std::to_string(b) +
+                                        " has " + std::to_string(m_bodies[b]->num_dofs()) +
+                                        " DOFs, and its positions do not match");
+    m_positions = std::move(positions);
+}
+
 void SceneMatrix::set_components(const std::vector<Index>& component_of_body)
 {
     if (static_cast<Index>(component_of_body.size()) != num_bodies())

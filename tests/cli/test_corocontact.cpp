@@ -30,6 +30,7 @@
 
 namespace fs = std::filesystem;
 using ::testing::HasSubstr;
+using ::testing::Not;
 using coro::test::listed_frames;
 using coro::test::Outcome;
 using coro::test::run;
@@ -226,11 +227,16 @@ TEST(CorocontactRun, OneAndTwoThreadsWriteIdenticalFramesThroughAnImpact)
     EXPECT_THAT(summary, ::testing::Not(HasSubstr("\"max_contact_depth\": 0,")));
 }
 
-TEST(CorocontactRun, OneAndTwoThreadsWriteIdenticalFramesOfAPile)
+// Solver settings of the pile below: the default preconditioner with double values, and every
+// other preconditioner and precision.
+class PileSolver : public ::testing::TestWithParam<const char*> {};
+
+TEST_P(PileSolver, OneAndTwoThreadsWriteIdenticalFrames)
 {
     // Bodies stacked on a floor and against a wall, touching each other from the first steps:
     // contact couples them into one system every step.
-    const fs::path dir = coro::test::scratch_dir("cli_threads_pile");
+    const std::string settings = GetParam();
+    const fs::path dir = coro::test::scratch_dir("cli_threads_pile_" + std::to_string(std::hash<std::string>()(settings)));
     std::string text = R"toml([simulation]
 dt = 0.004
 steps = 45
@@ -239,6 +245,7 @@ gravity = [0.0, -9.81, 0.0]
 [solver]
 max_iterations = 25
 tolerance = 1e-7
+)toml" + settings + R"toml(
 [contact]
 enabled = true
 stiffness = 4e4
@@ -284,7 +291,19 @@ normal = [1.0, 0.0, 0.0]
     EXPECT_EQ(compared, 1 + 4 + 4 * (9 + 2)); // pvd, 4 vtm, 4 × (9 bodies + 2 plane blocks) vtu
     EXPECT_THAT(summary, HasSubstr("contact:"));
     EXPECT_THAT(summary, ::testing::Not(HasSubstr("contact: 0.0 contact points")));
+    if (settings.find("amg") != std::string::npos) {
+        EXPECT_THAT(summary, HasSubstr("AMG: "));
+    }
 }
+
+INSTANTIATE_TEST_SUITE_P(BlockJacobiDouble, PileSolver, ::testing::Values(""));
+INSTANTIATE_TEST_SUITE_P(JacobiSingle, PileSolver,
+                         ::testing::Values("preconditioner = \"jacobi\"\nmatrix_precision = \"single\""));
+#if CORO_WITH_AMG
+INSTANTIATE_TEST_SUITE_P(AmgDouble, PileSolver, ::testing::Values("preconditioner = \"amg\""));
+INSTANTIATE_TEST_SUITE_P(AmgSingle, PileSolver,
+                         ::testing::Values("preconditioner = \"amg\"\nmatrix_precision = \"single\""));
+#endif
 
 TEST(CorocontactRun, FramePointsKeepTheMeshFileNodeOrder)
 {
@@ -438,9 +457,17 @@ TEST(CorocontactInfo, DescribesAMesh)
     ASSERT_EQ(outcome.exit_code, 0) << outcome.err;
     EXPECT_THAT(outcome.out, HasSubstr("nodes 76, tets 172"));
     EXPECT_THAT(outcome.out, HasSubstr("closed, consistently oriented, 1 piece, Euler characteristic 2, genus 0"));
-    const Outcome parts = run(std::string("info ") + CORO_TEST_DATA_DIR + "/msh/cube_v41.msh --parts 3", dir);
+    // --threads after the command, as run and detect take it.
+    const Outcome parts = run(std::string("info ") + CORO_TEST_DATA_DIR + "/msh/cube_v41.msh --parts 3 --threads 1", dir);
     ASSERT_EQ(parts.exit_code, 0) << parts.err;
     EXPECT_THAT(parts.out, HasSubstr("METIS parts 3: edge-cut"));
+    EXPECT_THAT(parts.err, Not(HasSubstr("note:")));
+    // More parts than tets: capped at one tet per part, and said so.
+    const Outcome capped = run(std::string("info ") + CORO_TEST_DATA_DIR + "/msh/cube_v41.msh --parts 1000000000", dir);
+    ASSERT_EQ(capped.exit_code, 0) << capped.err;
+    EXPECT_THAT(capped.err, HasSubstr("note: --parts 1000000000: the mesh has 172 tets, and a part holds at least one; "
+                                      "using 172 parts"));
+    EXPECT_THAT(capped.out, HasSubstr("METIS parts 172: edge-cut"));
     EXPECT_EQ(run("info " + (dir / "absent.msh").string(), dir).exit_code, 2);
 }
 

@@ -9,17 +9,24 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
 #include <chrono>
 #include <cstdio>
 #include <csignal>
 #include <regex>
 #include <string>
+#include <thread>
 #include <vector>
 
 namespace fs = std::filesystem;
 using ::testing::AllOf;
 using ::testing::HasSubstr;
 using ::testing::IsEmpty;
+using ::testing::Not;
+using ::testing::StartsWith;
 using coro::test::expect_every_listed_frame_loads;
 using coro::test::listed_frames;
 using coro::test::Outcome;
@@ -32,6 +39,8 @@ using coro::test::wait_for_frames;
 namespace {
 
 const std::string TWO_SPHERES = std::string(CORO_CASES_DIR) + "/two_spheres/two_spheres.toml";
+const std::string OVERLAP = std::string(CORO_CASES_DIR) + "/overlap/overlap.toml"; // 663 contact rows
+const std::string RING_MESH = std::string(CORO_CASES_DIR) + "/ring/ring.msh";
 
 /// Every temporary file under `dir`.
 std::vector<std::string> temporaries(const fs::path& dir)
@@ -195,6 +204,59 @@ TEST(CorocontactOutputFailure, AnOutputFolderThatCannotBeMadeExitsFour)
     EXPECT_THAT(outcome.err, HasSubstr((file / "contacts.csv").string() + ": cannot create contacts.csv.tmp (Not a directory)"));
 }
 
+TEST(CorocontactOutputFailure, AFailedWriteToStandardOutputExitsFour)
+{
+    // /dev/full takes the bytes and fails every write with ENOSPC, as a full disk does.
+    ASSERT_TRUE(fs::is_character_file("/dev/full")) << "this test needs /dev/full (Linux)";
+    const fs::path dir = coro::test::scratch_dir("cli_stdout_full");
+    for (const std::string& arguments :
+         {"run " + TWO_SPHERES + " --steps 2 --quiet --out " + (dir / "o").string(), "detect " + OVERLAP,
+          "detect " + OVERLAP + " --csv -", "info " + RING_MESH, "info " + RING_MESH + " --parts 2",
+          std::string("--help")}) {
+        const std::string command = std::string(CORO_CLI_PATH) + " " + arguments + " > /dev/full 2> " +
+                                    (dir / "err.txt").string() + " < /dev/null";
+        const int status = std::system(command.c_str());
+        ASSERT_TRUE(WIFEXITED(status)) << arguments;
+        EXPECT_EQ(WEXITSTATUS(status), 4) << arguments;
+        EXPECT_THAT(slurp(dir / "err.txt"), HasSubstr("error: writing to standard output: No space left on device"))
+            << arguments;
+    }
+}
+
+TEST(CorocontactDetect, CsvIntoANamedPipeOrThroughASymlinkLeavesThemWhatTheyAre)
+{
+    const fs::path dir = coro::test::scratch_dir("cli_csv_targets");
+    const fs::path regular = dir / "regular.csv";
+    Outcome outcome = run("detect " + OVERLAP + " --csv " + regular.string(), dir);
+    ASSERT_EQ(outcome.exit_code, 0) << outcome.err;
+    const std::string rows = slurp(regular);
+    ASSERT_THAT(rows, StartsWith("body,vertex,other,depth\n"));
+
+    // A named pipe, read as the command writes: the reader gets the rows, the pipe stays a pipe.
+    const fs::path fifo = dir / "contacts.fifo";
+    ASSERT_EQ(mkfifo(fifo.c_str(), 0600), 0);
+    std::string received;
+    std::thread reader([&] { received = slurp(fifo); });
+    outcome = run("detect " + OVERLAP + " --csv " + fifo.string(), dir);
+    // If the command never opened the pipe, the reader still waits for a writer: be that writer.
+    if (const int fd = ::open(fifo.c_str(), O_WRONLY | O_NONBLOCK); fd >= 0)
+        ::close(fd);
+    reader.join();
+    EXPECT_EQ(outcome.exit_code, 0) << outcome.err;
+    EXPECT_TRUE(fs::is_fifo(fs::symlink_status(fifo)));
+    EXPECT_EQ(received, rows);
+
+    // A symlink: its target gets the rows, the link stays a link.
+    const fs::path target = coro::test::write_text(dir / "target.csv", "old\n");
+    const fs::path link = dir / "link.csv";
+    fs::create_symlink(target, link);
+    outcome = run("detect " + OVERLAP + " --csv " + link.string(), dir);
+    EXPECT_EQ(outcome.exit_code, 0) << outcome.err;
+    EXPECT_TRUE(fs::is_symlink(fs::symlink_status(link)));
+    EXPECT_EQ(slurp(target), rows);
+    EXPECT_THAT(temporaries(dir), IsEmpty());
+}
+
 TEST(CorocontactCommandLine, CountsBeyondAnIndexAreRefusedNotWrapped)
 {
     const fs::path dir = coro::test::scratch_dir("cli_wrap");
@@ -222,6 +284,19 @@ TEST(CorocontactCommandLine, StepsOfAStaticCaseAreNotSilentlyIgnored)
     EXPECT_FALSE(fs::exists(dir / "o"));
     outcome = run("run " + case_file.string() + " --quiet --out " + (dir / "o").string(), dir);
     EXPECT_EQ(outcome.exit_code, 0) << outcome.err;
+    EXPECT_THAT(outcome.err, Not(HasSubstr("note:")));
+
+    // The time-step keys in a static case file: a note names them, and the run goes on.
+    const fs::path with_steps = coro::test::write_text(
+        dir / "static_steps.toml", "[simulation]\nanalysis = \"static\"\nload_steps = 2\nsteps = 3\ndt = 0.1\n"
+                                   "output_every = 7\n[[body]]\nshape = \"box\"\n[[body.fixed]]\nmax = [0.0, 1e9, 1e9]\n");
+    outcome = run("run " + with_steps.string() + " --quiet --out " + (dir / "o2").string(), dir);
+    EXPECT_EQ(outcome.exit_code, 0) << outcome.err;
+    EXPECT_THAT(outcome.err, HasSubstr("note: " + with_steps.string() +
+                                       ":5:1: simulation.dt, simulation.steps and simulation.output_every are not used "
+                                       "by a static analysis, which has no time steps: it runs simulation.load_steps = "
+                                       "2 load steps and writes every one\n"));
+    EXPECT_EQ(listed_frames(dir / "o2" / "static_steps.pvd").size(), 3u) << "load steps 0, 1 and 2";
 }
 
 TEST(CorocontactLoad, ASceneBeyondTheMemoryLimitIsRefusedNamingTheKey)

@@ -1,5 +1,5 @@
 // The progress line of `corocontact run` (tools/progress.hpp): it fits the terminal, and its
-// ETA follows the recent steps.
+// ETA follows the recent steps; not on a terminal, a long loading stage is named when it ends.
 
 #include "progress.hpp"
 
@@ -13,6 +13,7 @@
 using coro::cli::progress_line;
 using coro::cli::RecentRate;
 using ::testing::HasSubstr;
+using ::testing::MatchesRegex;
 using ::testing::StartsWith;
 
 TEST(ProgressLine, NeverAsWideAsTheTerminal)
@@ -95,4 +96,40 @@ TEST(Progress, TerminalRedrawsOneLineCutToTheWidth)
         EXPECT_LE(line.size(), 39u) << "'" << line << "'";
         start = end == std::string::npos ? text.size() : end;
     }
+}
+
+namespace {
+
+/// What a Progress that is not on a terminal prints for two loading stages, when a stage
+/// counts as long from `long_stage_s` seconds on.
+std::string plain_loading_lines(double long_stage_s)
+{
+    std::FILE* out = std::tmpfile();
+    if (out == nullptr)
+        return "no temporary file";
+    {
+        coro::cli::Progress progress(true, false, out, long_stage_s);
+        progress.status("body 'box' (1 of 1): meshing");
+        progress.status("body 'box' (1 of 1): METIS parts and element set-up, 48 tets");
+        progress.clear();
+    }
+    std::rewind(out);
+    std::string text;
+    for (int c; (c = std::fgetc(out)) != EOF;)
+        text += static_cast<char>(c);
+    std::fclose(out);
+    return text;
+}
+
+} // namespace
+
+TEST(Progress, NotOnATerminalALongLoadingStageGetsALineWhenItEnds)
+{
+    // Every stage counts as long: one plain line each, with its time, the last one at clear().
+    const std::string text = plain_loading_lines(0.0);
+    EXPECT_THAT(text, MatchesRegex("loading: body 'box' \\(1 of 1\\): meshing: [0-9.]+ s\n"
+                                   "loading: body 'box' \\(1 of 1\\): METIS parts and element set-up, 48 tets: "
+                                   "[0-9.]+ s\n"));
+    // Short stages stay silent.
+    EXPECT_EQ(plain_loading_lines(1e9), "");
 }

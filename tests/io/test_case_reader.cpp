@@ -60,6 +60,7 @@ output_dir = "results/run1"
 max_iterations = 40
 tolerance = 1e-7
 preconditioner = "jacobi"
+matrix_precision = "single"
 static_tolerance = 1e-9
 static_max_iterations = 30
 parts_per_thread = 2
@@ -137,7 +138,8 @@ mesh = ")" + ground.string() + "\"\n";
     const coro::SolverSettings& solver = spec.solver;
     EXPECT_EQ(solver.max_iterations, 40);
     EXPECT_EQ(solver.tolerance, 1e-7);
-    EXPECT_EQ(solver.preconditioner, coro::Preconditioner::JACOBI);
+    EXPECT_EQ(solver.preconditioner, coro::PcgPreconditioner::JACOBI);
+    EXPECT_EQ(solver.matrix_precision, coro::MatrixPrecision::SINGLE);
     EXPECT_EQ(solver.static_tolerance, 1e-9);
     EXPECT_EQ(solver.static_max_iterations, 30);
     EXPECT_EQ(solver.parts_per_thread, 2);
@@ -523,7 +525,11 @@ TEST(ReadCase, WrongEnumValueListsTheAllowedOnes)
                           HasSubstr("did you mean \"dynamic\"?"))));
     EXPECT_THAT([] { parse("[solver]\npreconditioner = \"ilu\"\n" + BOX); },
                 ThrowsMessage<coro::InputError>(StartsWith(
-                    "case.toml:2:18: solver.preconditioner: expected one of \"jacobi\" or \"block_jacobi\"")));
+                    "case.toml:2:18: solver.preconditioner: expected one of \"jacobi\", \"block_jacobi\" or \"amg\"")));
+    EXPECT_THAT([] { parse("[solver]\nmatrix_precision = \"half\"\n" + BOX); },
+                ThrowsMessage<coro::InputError>(StartsWith(
+                    "case.toml:2:20: solver.matrix_precision: expected one of \"double\" or \"single\", "
+                    "found the string \"half\"")));
     EXPECT_THAT([] { parse("[contact]\nmode = \"fast\"\n" + BOX); },
                 ThrowsMessage<coro::InputError>(
                     StartsWith("case.toml:2:8: contact.mode: expected one of \"exact\" or \"paper\"")));
@@ -623,6 +629,7 @@ INSTANTIATE_TEST_SUITE_P(
         BadValue{"LoadForceNan", body("[[body.load]]\nforce = [0, 0, nan]"), "case.toml:4:16: body[0].load[0].force[2]:", "finite"},
         BadValue{"PlaneNormalZero", BOX + "[[obstacle]]\nnormal = [0, 0, 0]\n", "case.toml:4:10: obstacle[0].normal:", "expected a nonzero vector"},
         BadValue{"BodyNameInvalid", body("name = \"a,b\""), "case.toml:3:8: body[0].name:", "letters, digits"},
+        BadValue{"BodyNameDotDot", body("name = \"..\""), "case.toml:3:8: body[0].name:", "found the string \"..\" (\".\" and \"..\" are not allowed: they name the current and the parent folder)"},
         BadValue{"BodyNameTooLong", body("name = \"" + std::string(200, 'b') + "\""), "case.toml:3:8: body[0].name:", "1 to 128 letters, digits, '_', '.' and '-', found the string \"bbb"},
         BadValue{"MeshEmpty", "[[body]]\nmesh = \"\"\n", "case.toml:2:8: body[0].mesh:", "empty"}),
     [](const ::testing::TestParamInfo<BadValue>& param_info) { return param_info.param.name; });

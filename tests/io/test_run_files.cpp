@@ -51,6 +51,7 @@ TEST(RemoveEarlierRun, AFreshRunRemovesEveryFileOfItsSeriesAndNothingElse)
                                                       "run_b_000000/a.vtu", "run_x.vtm"}));
     EXPECT_EQ(removed.frames, 3);
     EXPECT_EQ(removed.files, 14);
+    EXPECT_TRUE(removed.checkpoint);
 }
 
 TEST(RemoveEarlierRun, ARestartKeepsItsFramesUpToTheCheckpointAndTheCheckpoint)
@@ -64,6 +65,7 @@ TEST(RemoveEarlierRun, ARestartKeepsItsFramesUpToTheCheckpointAndTheCheckpoint)
                              "run.checkpoint.tmp", "run.pvd.tmp"})
         EXPECT_EQ(std::find(left.begin(), left.end(), gone), left.end()) << gone;
     EXPECT_EQ(removed.frames, 1);
+    EXPECT_FALSE(removed.checkpoint);
 }
 
 TEST(RemoveEarlierRun, AnEmptyOrForeignFolderIsLeftAsItIs)

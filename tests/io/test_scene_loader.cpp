@@ -123,8 +123,28 @@ TEST(LoadScene, RefusesValuesWhoseProductsOverflowDouble)
                                                     "about 1e+200")));
     EXPECT_THAT([] { load("load.toml", BLOCK + "[[body.load]]\nforce = [1e150, 0.0, 0.0]\n"); },
                 ThrowsMessage<InputError>(HasSubstr("dt × a load's total force is about 1e+148")));
-    // Large but representable: accepted.
-    EXPECT_EQ(load("young_ok.toml", BLOCK + "young = 1e120\n").scene.bodies.size(), 1u);
+    // Large but representable: accepted where no mass is added to it (a static analysis).
+    EXPECT_EQ(load("young_ok.toml", "[simulation]\nanalysis = \"static\"\n" + BLOCK +
+                                        "young = 1e120\n[[body.fixed]]\nmax = [0.0, 1e9, 1e9]\n")
+                  .scene.bodies.size(),
+              1u);
+}
+
+TEST(LoadScene, RefusesAStiffnessToMassRatioWhoseMassDoubleLoses)
+{
+    // dt²(λ+2μ)/(ρh²) = 1e-4 × 1.346e5 / (1e-20 × 1²) = 1.3e21: the mass vanishes in the sum.
+    EXPECT_THAT([] { load("light.toml", "[simulation]\ngravity = [0.0, -9.81, 0.0]\n" + BLOCK + "density = 1e-20\n"); },
+                ThrowsMessage<InputError>(AllOf(
+                    StartsWith(scratch().string() + "/light.toml:3: body 'block': the stiffness-to-mass ratio of the "
+                                                    "implicit step, dt²(λ+2μ)/(ρh²), is about 1.3e+21"),
+                    HasSubstr("density = 1e-20"), HasSubstr("expected at most 1e+10"),
+                    HasSubstr("simulation.dt at most 2.73e-08, young at most 7.43e-07, or density at least 1.35e-09"))));
+    // Just inside the bound (9.6e9), and the same body in a static analysis, which has no mass term.
+    EXPECT_EQ(load("light_ok.toml", BLOCK + "density = 1.4e-9\n").scene.bodies.size(), 1u);
+    EXPECT_EQ(load("light_static.toml", "[simulation]\nanalysis = \"static\"\n" + BLOCK +
+                                            "density = 1e-20\n[[body.fixed]]\nmax = [0.0, 1e9, 1e9]\n")
+                  .scene.bodies.size(),
+              1u);
 }
 
 TEST(LoadScene, RefusesValuesWhoseProductsVanishInDouble)

@@ -4,6 +4,8 @@
 
 #include "mesh_fixtures.hpp"
 
+#include <corocontact/config.hpp>
+
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
@@ -125,6 +127,23 @@ TEST(MpirunRun, BadInputIsReportedOnceAndEveryProcessExitsWithTwo)
     EXPECT_THAT(outcome.err, HasSubstr("stifness"));
     EXPECT_FALSE(fs::exists(dir / "out")) << "nothing written for bad input";
 }
+
+#if CORO_WITH_AMG
+TEST(MpirunRun, AmgIsRefusedForADistributedRun)
+{
+    const fs::path dir = coro::test::scratch_dir("mpirun_amg");
+    std::string text = slurp(DATA + "/touching_pile.toml");
+    text.replace(text.find("\"block_jacobi\""), 14, "\"amg\"");
+    std::ofstream(dir / "amg.toml") << text;
+    const Outcome outcome =
+        corocontact(2, "run " + (dir / "amg.toml").string() + " --quiet --out " + (dir / "out").string(), dir);
+    EXPECT_EQ(outcome.exit_code, 2);
+    EXPECT_EQ(count(outcome.err, "error: "), 1u) << outcome.err;
+    EXPECT_THAT(outcome.err, HasSubstr("amg.toml: solver.preconditioner = \"amg\" runs in one process only, and this "
+                                       "run has 2 (mpirun)"));
+    EXPECT_FALSE(fs::exists(dir / "out")) << "nothing written for bad input";
+}
+#endif
 
 TEST(MpirunRun, DivergenceOnOneProcessStopsAllWithThree)
 {

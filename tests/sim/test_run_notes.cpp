@@ -16,7 +16,7 @@ RunSummary solves(Index total, Index at_cap, double residual_mean)
     return summary;
 }
 
-SolverSettings solver(double tolerance, Preconditioner preconditioner = Preconditioner::BLOCK_JACOBI)
+SolverSettings solver(double tolerance, PcgPreconditioner preconditioner = PcgPreconditioner::BLOCK_JACOBI)
 {
     SolverSettings settings;
     settings.max_iterations = 10;
@@ -40,7 +40,7 @@ TEST(IterationCapWarning, NamesCountResidualAndRemedies)
 
 TEST(IterationCapWarning, SuggestsBlockJacobiWhenRunningJacobi)
 {
-    const auto warning = iteration_cap_warning(solves(10, 10, 0.5), solver(1e-6, Preconditioner::JACOBI));
+    const auto warning = iteration_cap_warning(solves(10, 10, 0.5), solver(1e-6, PcgPreconditioner::JACOBI));
     ASSERT_TRUE(warning.has_value());
     EXPECT_THAT(*warning, HasSubstr("preconditioner = \"block_jacobi\""));
 }

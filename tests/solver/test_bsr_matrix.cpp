@@ -75,7 +75,7 @@ BsrMatrix random_upper(Index n, unsigned seed, std::vector<Index> chunks)
     for (double& v : a.values())
         v = u(rng);
     for (Index r = 0; r < n; ++r) // diagonal blocks of a symmetric matrix are symmetric
-        a.block(a.diagonal(r)) = Block3(0.5 * (a.block(a.diagonal(r)) + a.block(a.diagonal(r)).transpose()));
+        a.set_block(a.diagonal(r), Block3(0.5 * (a.block(a.diagonal(r)) + a.block(a.diagonal(r)).transpose())));
     return a;
 }
 } // namespace
@@ -134,4 +134,44 @@ TEST(BsrMatrixUpper, RejectsMalformedPatternsAndChunks)
     EXPECT_THROW(BsrMatrix::symmetric_upper({0, 1, 2}, {0, 1}, {0, 2, 2}), std::invalid_argument); // empty chunk
     EXPECT_THROW(BsrMatrix::symmetric_upper({0, 1, 2}, {0, 1}, {0, 1}), std::invalid_argument);    // short of the rows
     EXPECT_NO_THROW(BsrMatrix::symmetric_upper({0}, {}));                                          // empty matrix
+}
+
+TEST(BsrMatrixSingle, StoresValuesRoundedToFloatAndMultipliesInDouble)
+{
+    // The same matrix in single precision: every value is the double one rounded to float, and
+    // the product is that of the rounded values with double vectors and sums (an upper-stored
+    // matrix with cross-chunk blocks, and a general one).
+    const BsrMatrix a = random_upper(60, 3, {0, 7, 8, 31, 59, 60});
+    const BsrMatrix single = a.with_precision(MatrixPrecision::SINGLE);
+    EXPECT_EQ(single.precision(), MatrixPrecision::SINGLE);
+    EXPECT_TRUE(single.values().empty());
+    ASSERT_EQ(single.single_values().size(), a.values().size());
+    for (std::size_t i = 0; i < a.values().size(); ++i)
+        ASSERT_EQ(single.single_values()[i], static_cast<float>(a.values()[i])) << "value " << i;
+    const VecX x = VecX::LinSpaced(a.num_dofs(), -1.0, 1.5);
+    for (const BsrMatrix& m : {single, single.to_general()}) {
+        EXPECT_EQ(m.precision(), MatrixPrecision::SINGLE);
+        VecX y(m.num_dofs());
+        m.multiply(x, y);
+        EXPECT_NEAR_REL(y, VecX(single.to_sparse() * x), 1e-13, 1e-13);
+    }
+    VecX y_one(a.num_dofs()), y_two(a.num_dofs());
+    tbb::task_arena(1).execute([&] { single.multiply(x, y_one); });
+    tbb::task_arena(2).execute([&] { single.multiply(x, y_two); });
+    EXPECT_TRUE(y_one == y_two);
+    // Widening back to double is exact.
+    EXPECT_TRUE(single.with_precision(MatrixPrecision::DOUBLE).to_sparse().isApprox(single.to_sparse(), 0.0));
+}
+
+TEST(BsrMatrixSingle, BlockWritesRoundOnceAfterAddingInDouble)
+{
+    BsrMatrix a = BsrMatrix::symmetric_upper({0, 1}, {0}, {}, MatrixPrecision::SINGLE);
+    const Block3 third = Block3::Constant(1.0 / 3.0);
+    a.set_block(0, third);
+    EXPECT_EQ(a.block(0)(1, 2), static_cast<double>(static_cast<float>(1.0 / 3.0)));
+    a.add_to_block(0, Block3::Constant(1e-9)); // below half a float ulp of 1/3: rounds back
+    EXPECT_EQ(a.block(0)(1, 2), static_cast<double>(static_cast<float>(1.0 / 3.0)));
+    a.add_to_block(0, third);
+    EXPECT_EQ(a.block(0)(0, 0),
+              static_cast<double>(static_cast<float>(static_cast<double>(static_cast<float>(1.0 / 3.0)) + 1.0 / 3.0)));
 }

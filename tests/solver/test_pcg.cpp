@@ -68,6 +68,23 @@ TEST(PcgSolver, StopsAtIterationCapAndReportsIt)
     EXPECT_GT(result.residual, 1e-14);
 }
 
+TEST(PcgSolver, ToleranceZeroIteratesToTheResidualFloorWithoutFalseBreakdown)
+{
+    // Run far past convergence, the residual would underflow and pᵀAp read 0.
+    const BsrMatrix a = fem_system(4);
+    const VecX b = VecX::LinSpaced(a.num_dofs(), -1.0, 2.0);
+    VecX x = VecX::Zero(a.num_dofs());
+    PcgSettings settings;
+    settings.max_iterations = 5000;
+    settings.tolerance = 0.0;
+    const PcgResult result = PcgSolver().solve(a, b, x, settings);
+    EXPECT_TRUE(result.converged);
+    EXPECT_LT(result.iterations, settings.max_iterations);
+    EXPECT_LE(result.residual, 1e-30);
+    const SparseMat sparse = a.to_sparse();
+    EXPECT_LE((b - sparse * x).norm() / b.norm(), 1e-13);
+}
+
 TEST(PcgSolver, WarmStartFromSolutionTakesNoIteration)
 {
     const BsrMatrix a = fem_system(3);

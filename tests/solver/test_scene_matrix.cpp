@@ -29,8 +29,8 @@ BsrMatrix random_spd_upper(Index n, unsigned seed, std::vector<Index> chunks)
     for (double& v : a.values())
         v = u(rng);
     for (Index r = 0; r < n; ++r)
-        a.block(a.diagonal(r)) = Block3(0.5 * (a.block(a.diagonal(r)) + a.block(a.diagonal(r)).transpose()) +
-                                        Block3::Identity() * 4.0 * n);
+        a.set_block(a.diagonal(r), Block3(0.5 * (a.block(a.diagonal(r)) + a.block(a.diagonal(r)).transpose()) +
+                                          Block3::Identity() * 4.0 * n));
     return a;
 }
 

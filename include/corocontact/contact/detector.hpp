@@ -86,9 +86,10 @@ struct DetectionSettings {
 };
 
 /// The working memory of detect_contacts(), kept from call to call so that a time loop does not
-/// allocate it every step: the face planes of the depth searches (recomputed every call, for
-/// the nodes a search reaches), the grouping's arrays, the pass's buffers. Holds nothing a
-/// result depends on: any scratch gives the same answers. One call at a time may use it.
+/// allocate it every step: the broad and mid phase's lists, the face planes of the depth
+/// searches (recomputed every call, for the nodes a search reaches), the grouping's arrays, the
+/// pass's buffers. Its buffers never shrink. Holds nothing a result depends on: any scratch
+/// gives the same answers. One call at a time may use it.
 class DetectionScratch {
 public:
     DetectionScratch();
@@ -107,6 +108,13 @@ private:
 /// Vertices lying exactly on the other surface (touching bodies) are not inside (exact mode).
 /// @param[in] surfaces  one per body, trees refit to the current positions
 /// @param[in,out] scratch  working memory (see DetectionScratch)
+/// @param[out] points  the contact points; its old content is replaced, its capacity kept, so
+///                     that a time loop passing the same vector and scratch allocates nothing
+///                     once they have grown to the scene's contacts
+void detect_contacts(const std::vector<ContactSurface>& surfaces, const DetectionSettings& settings,
+                     DetectionScratch& scratch, std::vector<ContactPoint>& points, DetectionStats* stats = nullptr);
+
+/// The same, returned.
 std::vector<ContactPoint> detect_contacts(const std::vector<ContactSurface>& surfaces,
                                           const DetectionSettings& settings, DetectionScratch& scratch,
                                           DetectionStats* stats = nullptr);

@@ -15,9 +15,24 @@ struct PlaneObstacle {
     Vec3 normal = Vec3::UnitY(); ///< unit
 };
 
+/// The working memory of detect_plane_contacts(), kept from call to call: each body's points
+/// (its vectors never shrink).
+struct PlaneContactScratch {
+    std::vector<std::vector<ContactPoint>> per_body;
+};
+
 /// Every surface vertex below a plane: depth = −(x − point)·normal, normal = the plane's,
 /// face = −1, other = ContactTarget::plane(k). Sorted by contact_order().
 /// @param[in] surfaces  contact surfaces; only the first `num_bodies` are tested
+/// @param[out] points   the contact points; its old content is replaced, its capacity kept (a
+///                      time loop passing the same vector and scratch allocates nothing once
+///                      they have grown to the scene's contacts)
+/// @param[in,out] scratch  working memory
+void detect_plane_contacts(const std::vector<ContactSurface>& surfaces, Index num_bodies,
+                           const std::vector<PlaneObstacle>& planes, std::vector<ContactPoint>& points,
+                           PlaneContactScratch& scratch);
+
+/// The same, returned (for a single detection).
 std::vector<ContactPoint> detect_plane_contacts(const std::vector<ContactSurface>& surfaces, Index num_bodies,
                                                 const std::vector<PlaneObstacle>& planes);
 

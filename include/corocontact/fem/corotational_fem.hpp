@@ -73,7 +73,10 @@ public:
 
     /// A matrix with this body's node-adjacency pattern (values zero), symmetric in upper
     /// storage with the parts as its product chunks.
-    BsrMatrix make_matrix() const;
+    /// @param[in] precision  how the matrix stores its values: the element loop adds each
+    ///                       tet's contribution in double to the stored value and stores the
+    ///                       sum in this precision
+    BsrMatrix make_matrix(MatrixPrecision precision = MatrixPrecision::DOUBLE) const;
 
     /// Fills `matrix` (from make_matrix) with stiffness_scale·K' + mass_scale·M with the current
     /// rotations; rows and columns of fixed nodes are replaced by identity (projection).
@@ -123,13 +126,14 @@ public:
 private:
     using Pass = ElementPass;
     // Where a tet's contributions go: a target ≥ 0 is a matrix block or node of an interior
-    // row, a target < 0 the interface buffer entry −1 − target.
-    struct Slots {
-        double* values;       // matrix values, or null when no matrix is assembled
-        double* block_buffer;
+    // row, a target < 0 the interface buffer entry −1 − target. Blocks are stored in the
+    // matrix's precision (Value: double or float), forces in double.
+    template <class Value> struct Slots {
+        Value* values;        // matrix values, or null when no matrix is assembled
+        Value* block_buffer;
         double* forces;       // #3V, or null when no forces are computed
         double* force_buffer;
-        double* block(Index target) const
+        Value* block(Index target) const
         {
             return target >= 0 ? values + 9 * static_cast<std::ptrdiff_t>(target)
                                : block_buffer + 9 * static_cast<std::ptrdiff_t>(-1 - target);
@@ -141,10 +145,14 @@ private:
         }
     };
     void run_pass(const Pass& pass);
-    void tet_range(Index t_begin, Index t_end, const Pass& pass, const Slots& slots);
-    void one_tet(Index t, const Pass& pass, const Slots& slots);
+    // element_part() with the matrix values and interface buffer of the matrix's precision.
+    template <class Value> void element_part_in(Index part, const Pass& pass, Value* values, Value* block_buffer);
+    template <class Value> void tet_range(Index t_begin, Index t_end, const Pass& pass, const Slots<Value>& slots);
+    template <class Value> void one_tet(Index t, const Pass& pass, const Slots<Value>& slots);
     // Tets first .. first + count − 1 (count ≤ 4) as one AVX2 pack (detail/tet_pack_kernel.hpp).
-    void tet_pack(Index first, int count, const Pass& pass, const Slots& slots);
+    template <class Value> void tet_pack(Index first, int count, const Pass& pass, const Slots<Value>& slots);
+    // Σ of the part buffers' entries of interface block b (in ascending part order), in double.
+    template <class Value> Block3 interface_block_sum(Index b, const Value* block_buffer) const;
     void project_fixed_rows(Index row_begin, Index row_end, const char* fixed, BsrMatrix& matrix) const;
 
     Tets m_tets;
@@ -169,7 +177,8 @@ private:
     std::vector<std::array<Index, 4>> m_force_targets;
     // Interface buffers, part by part, and per interface block / node the buffer entries to
     // sum, in ascending part order.
-    std::vector<double> m_block_buffer;  // 9 per entry
+    std::vector<double> m_block_buffer;         // 9 per entry, for a double-precision matrix
+    std::vector<float> m_single_block_buffer;   // 9 per entry, for a single-precision matrix
     std::vector<double> m_force_buffer;  // 3 per entry
     std::vector<Index> m_part_block_buffer_offsets; // #parts+1
     std::vector<Index> m_part_force_buffer_offsets; // #parts+1

@@ -6,6 +6,7 @@
 
 #include <filesystem>
 #include <string>
+#include <vector>
 
 namespace coro {
 
@@ -19,8 +20,16 @@ namespace coro {
 ///         and names the key and what was expected
 CaseSpec read_case(const std::filesystem::path& file);
 
+/// Same as read_case; `notes` also gets what the file sets that its analysis does not use
+/// ("case.toml:3:1: simulation.steps is not used by a static analysis, ..."): a note, not an
+/// error, since a case file may keep the keys of both analyses.
+CaseSpec read_case(const std::filesystem::path& file, std::vector<std::string>& notes);
+
 /// Same as read_case, from text already in memory; `file` is used for messages and to
 /// resolve relative paths.
 CaseSpec parse_case(const std::string& text, const std::filesystem::path& file);
+
+/// Same as parse_case, with the notes of read_case(file, notes).
+CaseSpec parse_case(const std::string& text, const std::filesystem::path& file, std::vector<std::string>& notes);
 
 } // namespace coro

@@ -21,6 +21,7 @@ std::filesystem::path checkpoint_path(const std::filesystem::path& dir, const st
 struct RemovedFiles {
     Index frames = 0; ///< frames (a .vtm with its folder of .vtu files)
     Index files = 0;  ///< files of any kind, the frames' included
+    bool checkpoint = false; ///< the earlier run's checkpoint was one of them
 };
 
 /// Removes what an earlier run of series `name` left in `dir`, so that nothing of it stands

@@ -24,8 +24,10 @@ public:
     /// @param[in] mesh       positively oriented tets, positions after the body transform [m]
     /// @param[in] spec       material, damping, initial velocity, fixed regions and box loads
     /// @param[in] num_parts  parts of the parallel element loop, ≥ 1
+    /// @param[in] precision  how the system matrix stores its values
     /// @throws InputError naming spec.location if a fixed or load box contains no node
-    Body(const TetMesh& mesh, const BodySpec& spec, Index num_parts = 1);
+    Body(const TetMesh& mesh, const BodySpec& spec, Index num_parts = 1,
+         MatrixPrecision precision = MatrixPrecision::DOUBLE);
 
     const std::string& name() const { return m_name; }
     /// The mesh in internal order.
@@ -98,7 +100,7 @@ private:
         Index edge_cut = 0;
     };
     static Partitioned partition_mesh(const TetMesh& mesh, Index num_parts);
-    Body(Partitioned&& partitioned, const BodySpec& spec);
+    Body(Partitioned&& partitioned, const BodySpec& spec, MatrixPrecision precision);
 
     std::string m_name;
     Index m_edge_cut = 0;

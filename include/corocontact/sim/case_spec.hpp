@@ -8,6 +8,8 @@
 #include <corocontact/core/material.hpp>
 #include <corocontact/core/primitives.hpp>
 #include <corocontact/core/types.hpp>
+#include <corocontact/solver/bsr_matrix.hpp>
+#include <corocontact/solver/preconditioner.hpp>
 
 #include <array>
 #include <filesystem>
@@ -17,7 +19,6 @@
 namespace coro {
 
 enum class Analysis { DYNAMIC, STATIC };
-enum class Preconditioner { JACOBI, BLOCK_JACOBI };
 enum class ContactMode { EXACT, PAPER };
 enum class CrossCheck { NONE, EMBREE };
 
@@ -37,7 +38,8 @@ struct SimulationSettings {
 struct SolverSettings {
     Index max_iterations = 100;        ///< PCG iteration cap per solve, ≥ 1
     double tolerance = 1e-6;           ///< PCG relative residual, ≥ 0 (0: every solve runs the cap)
-    Preconditioner preconditioner = Preconditioner::BLOCK_JACOBI;
+    PcgPreconditioner preconditioner = PcgPreconditioner::BLOCK_JACOBI;
+    MatrixPrecision matrix_precision = MatrixPrecision::DOUBLE; ///< how the system matrices store values
     double static_tolerance = 1e-8;    ///< static: residual relative to the load, > 0
     Index static_max_iterations = 50;  ///< static: Newton iterations per load step, ≥ 1
     Index parts_per_thread = 4;        ///< METIS parts per thread (partitioned loops), ≥ 1

@@ -7,6 +7,7 @@
 #include <corocontact/contact/detector.hpp>
 #include <corocontact/sim/case_spec.hpp>
 
+#include <utility>
 #include <vector>
 
 namespace coro {
@@ -42,6 +43,22 @@ void contact_components(const std::vector<ContactSurface>& surfaces, Index num_b
 /// @param[in] body_boxes  #bodies
 /// @param[out] component_of_body  #bodies
 void contact_components(const std::vector<Aabb>& body_boxes, std::vector<Index>& component_of_body);
+
+/// The working memory of contact_components(), kept from step to step: a time step passing the
+/// same one allocates nothing once it has grown to the scene.
+struct ComponentScratch {
+    std::vector<Aabb> boxes;                    ///< per body
+    std::vector<Index> sweep_order;             ///< the broad phase's working memory
+    std::vector<std::pair<Index, Index>> pairs; ///< bodies whose boxes overlap
+};
+
+/// contact_components() with the working memory `scratch`.
+void contact_components(const std::vector<ContactSurface>& surfaces, Index num_bodies, ComponentScratch& scratch,
+                        std::vector<Index>& component_of_body);
+/// contact_components() of the bodies' boxes with the working memory `scratch` (which may hold
+/// `body_boxes` itself).
+void contact_components_of_boxes(const std::vector<Aabb>& body_boxes, ComponentScratch& scratch,
+                                 std::vector<Index>& component_of_body);
 
 /// Detection settings from the case's [contact] table.
 DetectionSettings detection_settings(const ContactSettings& contact);

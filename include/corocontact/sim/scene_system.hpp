@@ -54,6 +54,9 @@ public:
     ///                            the coupling blocks are expected in matrix().coupling()
     void assemble(double dt, const Vec3& gravity, const std::vector<VecX>& contact_forces);
 
+    /// Set-ups and applications of the PCG's preconditioner so far (AMG; zero for the others).
+    PreconditionerTimes preconditioner_times() const { return m_pcg.preconditioner_times(); }
+
     /// Step part 3: one PCG over the scene.
     /// @param[in] exchange  null, or the halo and chunk sums of a scene spread over processes
     ///                      (see PcgSolver::solve; collective then)

@@ -12,6 +12,7 @@
 #include <corocontact/sim/contact_response.hpp>
 #include <corocontact/sim/divergence_check.hpp>
 #include <corocontact/sim/phase_times.hpp>
+#include <corocontact/sim/scene_contact.hpp>
 #include <corocontact/sim/scene_system.hpp>
 #include <corocontact/solver/pcg.hpp>
 
@@ -49,6 +50,8 @@ struct RunSummary {
     double cg_residual_mean = 0.0;   ///< relative residual after each solve, averaged
     Index solves = 0;              ///< PCG solves done
     Index solves_not_converged = 0; ///< solves that stopped at the iteration cap
+    PreconditionerTimes preconditioner; ///< AMG: hierarchy set-ups and V-cycles (their time is
+                                        ///< part of phases.solve); zero for the other kinds
     Index static_not_converged = 0; ///< static load steps that missed static_tolerance
     double static_iterations_mean = 0.0; ///< static: Newton iterations per load step and body
     Index static_iterations_max = 0;     ///< static: the most Newton iterations of a load step
@@ -174,6 +177,9 @@ private:
     ContactResponse m_response;            // of the last detection, used by the next step
     std::vector<Index> m_components;       // contact_components() of the last detection
     DetectionScratch m_detection;          // detect_contacts' working memory, kept from step to step
+    std::vector<ContactPoint> m_surface_contacts, m_plane_contacts; // a detection's, before their merge
+    PlaneContactScratch m_plane_scratch;                           // detect_plane_contacts' working memory
+    ComponentScratch m_component_scratch;                          // contact_components' working memory
     DivergenceCheck m_divergence;          // run after every step
     Index m_step = 0;                      // steps done
     RunSummary m_totals;                   // counters so far; *_mean fields hold sums

@@ -3,7 +3,8 @@
 /// @brief Block sparse row matrix with 3×3 blocks: the pattern is built once per body and
 /// its values refilled every step. Either every block is stored (general), or, for a
 /// symmetric matrix, only the blocks on and above the diagonal (upper storage: half the
-/// memory traffic in PCG, which is bandwidth bound).
+/// memory traffic in PCG, which is bandwidth bound). The values are stored in double or in
+/// single precision, chosen at construction; products and sums always run in double.
 
 #include <corocontact/core/types.hpp>
 
@@ -12,8 +13,15 @@
 
 namespace coro {
 
-/// Row-major 3×3 block as stored in a BsrMatrix.
+/// Row-major 3×3 block, as a BsrMatrix stores it.
 using Block3 = Eigen::Matrix<double, 3, 3, Eigen::RowMajor>;
+
+/// How a BsrMatrix stores its values (case file: solver.matrix_precision).
+enum class MatrixPrecision {
+    DOUBLE, ///< 8 bytes per value
+    SINGLE, ///< 4 bytes per value (rounded to float when written): half the memory traffic of
+            ///< a product, whose vectors and sums stay double
+};
 
 /// A square matrix of #N×#N blocks of 3×3 (node × node); columns sorted within each row.
 ///
@@ -29,8 +37,10 @@ public:
     /// @param[in] row_offsets  #N+1 offsets into `columns` (CSR of the block pattern)
     /// @param[in] columns      block column of each stored block, ascending within a row;
     ///                         every row must hold its diagonal block
+    /// @param[in] precision    how the values are stored
     /// @throws std::invalid_argument if the pattern is malformed
-    BsrMatrix(std::vector<Index> row_offsets, std::vector<Index> columns);
+    BsrMatrix(std::vector<Index> row_offsets, std::vector<Index> columns,
+              MatrixPrecision precision = MatrixPrecision::DOUBLE);
 
     /// A symmetric matrix in upper storage.
     /// @param[in] row_offsets    #N+1 offsets into `columns`
@@ -39,9 +49,13 @@ public:
     /// @param[in] chunk_offsets  row boundaries 0 = c_0 < c_1 < … < c_m = #N of the product's
     ///                           tasks; choose them so that most couplings stay inside a chunk
     ///                           (the METIS parts); empty: chunks of 1024 rows
+    /// @param[in] precision      how the values are stored
     /// @throws std::invalid_argument if the pattern or the chunks are malformed
     static BsrMatrix symmetric_upper(std::vector<Index> row_offsets, std::vector<Index> columns,
-                                     std::vector<Index> chunk_offsets = {});
+                                     std::vector<Index> chunk_offsets = {},
+                                     MatrixPrecision precision = MatrixPrecision::DOUBLE);
+
+    MatrixPrecision precision() const { return m_precision; }
 
     /// True for upper storage (see symmetric_upper()).
     bool is_symmetric_upper() const { return !m_chunk_offsets.empty(); }
@@ -64,14 +78,21 @@ public:
     /// @throws std::invalid_argument if the block is not in the pattern
     void add_symmetric_part(Index row, Index column, const Mat3& value);
 
-    Eigen::Map<Block3> block(Index k) { return Eigen::Map<Block3>(m_values.data() + 9 * k); }
-    Eigen::Map<const Block3> block(Index k) const
-    {
-        return Eigen::Map<const Block3>(m_values.data() + 9 * k);
-    }
-    /// All values, 9 per block, blocks in pattern order.
+    /// The value of block k (a copy, in double; const so that assigning to it does not compile:
+    /// write with set_block()).
+    const Block3 block(Index k) const;
+    /// Sets block k (rounded to float in single precision).
+    void set_block(Index k, const Block3& value);
+    /// Adds to block k: in double, then stored (rounded to float in single precision).
+    void add_to_block(Index k, const Block3& value);
+
+    /// The values of a double-precision matrix: 9 per block (row-major), blocks in pattern
+    /// order. Empty for a single-precision matrix.
     std::vector<double>& values() { return m_values; }
     const std::vector<double>& values() const { return m_values; }
+    /// The values of a single-precision matrix, likewise. Empty for a double-precision matrix.
+    std::vector<float>& single_values() { return m_single_values; }
+    const std::vector<float>& single_values() const { return m_single_values; }
 
     /// y = A x, parallel over block rows; each row is summed in pattern order, so the result
     /// does not depend on the thread count.
@@ -100,17 +121,24 @@ public:
     /// The same matrix as an Eigen sparse matrix, every block (tests, reference paths).
     SparseMat to_sparse() const;
 
-    /// The same matrix in general storage (itself if it is general).
+    /// The same matrix in general storage (itself if it is general), in the same precision.
     BsrMatrix to_general() const;
+
+    /// The same pattern, chunks and values in another precision (values rounded to float, or
+    /// widened exactly to double).
+    BsrMatrix with_precision(MatrixPrecision precision) const;
 
 private:
     void check_pattern(bool upper);
+    void allocate_values();
     void multiply_upper_chunks(const double* x, double* y) const;
 
     std::vector<Index> m_row_offsets{0};
     std::vector<Index> m_columns;
     std::vector<Index> m_diagonal;
-    std::vector<double> m_values;
+    MatrixPrecision m_precision = MatrixPrecision::DOUBLE;
+    std::vector<double> m_values;       // DOUBLE: 9 per block
+    std::vector<float> m_single_values; // SINGLE: 9 per block
     // Upper storage only: the chunks, and per row the blocks (k, source row) of earlier
     // chunks whose column is this row, ascending in source row (CSR over rows).
     std::vector<Index> m_chunk_offsets;

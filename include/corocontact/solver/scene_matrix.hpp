@@ -44,6 +44,17 @@ public:
     /// The body of chunk c.
     Index chunk_body(Index chunk) const { return m_chunk_body[static_cast<std::size_t>(chunk)]; }
 
+    /// Attaches the node positions of every body: an elasticity matrix's near-null space is
+    /// spanned by the rigid-body motions of its nodes, from which the AMG preconditioner builds
+    /// its coarse spaces. Referenced like the matrices (the values may change between uses).
+    /// @param[in] positions  per body, in body order, #3V_b node positions [m]
+    /// @throws std::invalid_argument if the count or a size does not match the bodies
+    void set_node_positions(std::vector<const VecX*> positions);
+    /// The positions of body b, or null when none are attached.
+    const VecX* node_positions(Index body) const
+    {
+        return m_positions.empty() ? nullptr : m_positions[static_cast<std::size_t>(body)];
+    }
     /// Components: component_of_body[b] for every body, numbered 0, 1, … in the order of each
     /// component's first body. Every coupling block must join bodies of one component.
     /// @throws std::invalid_argument if the numbering is not of that form
@@ -78,6 +89,7 @@ public:
 
 private:
     std::vector<const BsrMatrix*> m_bodies;
+    std::vector<const VecX*> m_positions; // per body, or empty
     std::vector<Index> m_offsets;       // #bodies+1
     RowChunks m_chunks;
     std::vector<Index> m_chunk_body;    // #chunks

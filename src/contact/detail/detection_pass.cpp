@@ -7,7 +7,6 @@
 #include <algorithm>
 #include <array>
 #include <cstdint>
-#include <map>
 #include <utility>
 
 namespace coro::detail {
@@ -65,20 +64,25 @@ DetectionPass::DetectionPass(const std::vector<ContactSurface>& surfaces, const 
     // makes them from the candidates.
     m_state.slots.resize(contact_data ? offsets.back() : 0);
     m_state.inside.assign(offsets.back(), 0);
-    m_state.stats.clear();
-    if (contact_data && !(custom && custom->nearest)) {
-        // The last answers of the pairs of this detection (those of pairs apart now are dropped).
-        std::map<std::pair<Index, Index>, std::vector<Index>> kept;
-        m_last_face.resize(candidates.size());
-        for (std::size_t k = 0; k < candidates.size(); ++k) {
-            const std::pair<Index, Index> key{candidates[k].body, candidates[k].other};
-            std::vector<Index>& last = kept[key];
-            if (const auto old = m_state.last_face.find(key); old != m_state.last_face.end())
-                last.swap(old->second);
-            last.resize(static_cast<std::size_t>(surfaces[static_cast<std::size_t>(key.first)].vertices.rows()), -1);
-            m_last_face[k] = last.data();
+    for (DetectionStats& counts : m_state.stats) // zeroed, not cleared: a thread keeps its entry
+        counts = DetectionStats{};
+    if (contact_data && !(custom && custom->nearest))
+        keep_last_faces();
+}
+
+void DetectionPass::keep_last_faces()
+{
+    CORO_ASSERT(m_state.directed.size() == m_candidates.size());
+    std::vector<LastFaces>& last_faces = m_state.last_faces.assign(m_state.directed);
+    for (std::size_t k = 0; k < m_candidates.size(); ++k) {
+        const PairCandidates& pair = m_candidates[k];
+        LastFaces& faces = last_faces[k];
+        if (faces.body != pair.body || faces.other != pair.other) { // a new pair: no starts yet
+            faces.body = pair.body;
+            faces.other = pair.other;
+            faces.face.clear();
         }
-        m_state.last_face.swap(kept);
+        faces.face.resize(static_cast<std::size_t>(m_surfaces[static_cast<std::size_t>(pair.body)].vertices.rows()), -1);
     }
 }
 
@@ -108,7 +112,7 @@ void DetectionPass::contact_points(std::size_t k, Index first, Index count, cons
     // previous packet (a neighbour), else from the face its inside test crossed. The answers do
     // not depend on the starts, only the work does; within a detection the starts depend only on
     // the block, not on the scheduling.
-    Index* last = m_last_face[k];
+    Index* last = m_state.last_faces.items()[k].face.data();
     constexpr int PACKET = NearestSearch::PACKET;
     Vec3 points[PACKET];
     double bounds[PACKET];
@@ -201,7 +205,7 @@ void DetectionPass::take(std::size_t k, Index first, Index count, const GroupedA
     });
 }
 
-std::vector<ContactPoint> DetectionPass::sorted_points()
+void DetectionPass::sorted_points(std::vector<ContactPoint>& points)
 {
     // Per body (the candidates are ordered by (body, other)), a counting sort by vertex of the
     // inside slots: count the slots of each vertex, turn the counts into places, put each slot
@@ -213,7 +217,7 @@ std::vector<ContactPoint> DetectionPass::sorted_points()
     std::size_t total = 0;
     for (std::size_t s = 0; s < m_state.inside.size(); ++s)
         total += inside[s];
-    std::vector<ContactPoint> points;
+    points.clear();
     points.reserve(total);
     for (std::size_t first = 0, last = 0; first < m_candidates.size(); first = last) {
         const Index body = m_candidates[first].body;
@@ -254,10 +258,9 @@ std::vector<ContactPoint> DetectionPass::sorted_points()
         }
     }
     CORO_ASSERT(points.size() == total);
-    return points;
 }
 
-std::vector<ContactPoint> DetectionPass::finish(Index pairs, DetectionStats* stats)
+void DetectionPass::finish(Index pairs, DetectionStats* stats, std::vector<ContactPoint>& points)
 {
     if (stats) {
         DetectionStats sum;
@@ -271,7 +274,7 @@ std::vector<ContactPoint> DetectionPass::finish(Index pairs, DetectionStats* sta
         }
         *stats = sum;
     }
-    return sorted_points();
+    sorted_points(points);
 }
 
 } // namespace coro::detail

@@ -34,8 +34,9 @@ public:
 
     bool contact_data() const { return m_contact_data; }
 
-    /// The inside points, sorted; the counts of every block taken, with `pairs`, into `stats`.
-    std::vector<ContactPoint> finish(Index pairs, DetectionStats* stats);
+    /// The inside points, sorted, into `points` (its old content replaced); the counts of every
+    /// block taken, with `pairs`, into `stats`.
+    void finish(Index pairs, DetectionStats* stats, std::vector<ContactPoint>& points);
 
 private:
     /// The contact points of the inside candidates among first .. first + count − 1 of pair k,
@@ -46,14 +47,15 @@ private:
     /// Counts of a block into the thread's stats.
     void count(Index candidates, Index inside, Index on_surface, Index fallbacks, Index by_neighbour);
     /// The points of the inside slots, sorted (a counting sort by vertex per body).
-    std::vector<ContactPoint> sorted_points();
+    void sorted_points(std::vector<ContactPoint>& points);
+    /// The starts of the depth searches: the last detection's for the pairs it had, none for new ones.
+    void keep_last_faces();
 
     const std::vector<ContactSurface>& m_surfaces;
     const std::vector<PairCandidates>& m_candidates;
     bool m_contact_data;
     DetectionState& m_state;
     const CustomNarrowPhase* m_custom; // null, or with an empty nearest: the trees' searches
-    std::vector<Index*> m_last_face;   // per pair: DetectionState::last_face of its vertices
 };
 
 } // namespace coro::detail

@@ -21,31 +21,34 @@ constexpr std::size_t TEST_BLOCK = 256;
 
 } // namespace
 
-std::vector<SlotPairs> overlapping_slot_pairs(const std::vector<ContactSurface>& surfaces,
-                                              const std::vector<std::pair<Index, Index>>& pairs)
+void overlapping_slot_pairs(const std::vector<ContactSurface>& surfaces,
+                            const std::vector<std::pair<Index, Index>>& pairs, PairBuffers<PairSlots>& slot_pairs)
 {
-    std::vector<SlotPairs> slot_pairs(pairs.size());
+    std::vector<PairSlots>& out = slot_pairs.assign(pairs);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, pairs.size(), 1), [&](const tbb::blocked_range<std::size_t>& r) {
         for (std::size_t j = r.begin(); j < r.end(); ++j) {
             const ContactSurface& a = surfaces[static_cast<std::size_t>(pairs[j].first)];
             const ContactSurface& b = surfaces[static_cast<std::size_t>(pairs[j].second)];
             if (a.closed || b.closed)
-                overlapping_slots(a.tree, b.tree, a.tree.bounds().intersection(b.tree.bounds()), slot_pairs[j]);
+                overlapping_slots(a.tree, b.tree, a.tree.bounds().intersection(b.tree.bounds()), out[j].pairs,
+                                  out[j].walk);
+            else
+                out[j].pairs.clear();
         }
     });
-    return slot_pairs;
 }
 
 void grouped_inside_tests(const std::vector<ContactSurface>& surfaces, const std::vector<PairCandidates>& candidates,
-                          const std::vector<SlotPairs>& slot_pairs, const AxisRayTolerances& tolerances,
-                          bool distance_bounds, tbb::enumerable_thread_specific<GroupScratch>& scratch,
+                          const std::vector<PairSlots>& slot_pairs, const AxisRayTolerances& tolerances,
+                          bool distance_bounds, GroupingScratch& scratch,
                           const std::function<void(std::size_t pair, const GroupedAnswers& answers)>& use)
 {
     const std::size_t pairs = candidates.size();
     // The face pairs of each k: candidates holds (a, b) and (b, a), ordered by (body, other), so
     // those with body < other come in the order of their pairs; the other direction takes the
     // slot pairs of its reverse, columns swapped.
-    std::vector<std::size_t> pair_of(pairs);
+    std::vector<std::size_t>& pair_of = scratch.slot_pairs_of;
+    pair_of.resize(pairs);
     std::size_t lower = 0;
     for (std::size_t k = 0; k < pairs; ++k)
         if (candidates[k].body < candidates[k].other)
@@ -64,20 +67,28 @@ void grouped_inside_tests(const std::vector<ContactSurface>& surfaces, const std
     }
     // Per pair, in one task: the groups, the tests of their first vertices (blocks of them as
     // nested tasks when there are many) and their use, where the rest of each group take them.
+    // The answers of a pair have their own buffers: while a task waits for its nested tasks, its
+    // thread may take up another pair.
+    scratch.keys.clear();
+    for (const PairCandidates& pair : candidates)
+        scratch.keys.emplace_back(pair.body, pair.other);
+    std::vector<GroupedAnswers>& answers_of = scratch.answers.assign(scratch.keys);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, pairs, 1), [&](const tbb::blocked_range<std::size_t>& r) {
-        GroupedAnswers answers;
-        std::vector<Index>& group = answers.group;
-        std::vector<Index>& tested = answers.tested;
-        std::vector<InsideTest>& answer = answers.answer;
         for (std::size_t k = r.begin(); k < r.end(); ++k) {
+            GroupedAnswers& answers = answers_of[k];
+            std::vector<Index>& group = answers.group;
+            std::vector<Index>& tested = answers.tested;
+            std::vector<InsideTest>& answer = answers.answer;
             const PairCandidates& pair = candidates[k];
             const ContactSurface& body = surfaces[static_cast<std::size_t>(pair.body)];
             const ContactSurface& other = surfaces[static_cast<std::size_t>(pair.other)];
             const std::size_t n = pair.vertices.size();
+            if (!distance_bounds)
+                answers.path.clear();
             if (other.closed) {
-                clear_edge_groups(body, other, slot_pairs[pair_of[k]],
+                clear_edge_groups(body, other, slot_pairs[pair_of[k]].pairs,
                                   pair.body < pair.other ? PairColumn::FIRST : PairColumn::SECOND, pair.vertices,
-                                  scratch.local(), group, tested, distance_bounds ? &answers.path : nullptr);
+                                  scratch.groups.local(), group, tested, distance_bounds ? &answers.path : nullptr);
             } else {
                 group.resize(n);
                 for (std::size_t i = 0; i < n; ++i)

@@ -6,6 +6,8 @@
 #include <corocontact/contact/detector.hpp>
 
 #include "clear_edge_groups.hpp"
+#include "pair_buffers.hpp"
+#include "tree_access.hpp"
 
 #include <tbb/enumerable_thread_specific.h>
 
@@ -26,10 +28,25 @@ struct GroupedAnswers {
     std::vector<double> path;       ///< size n with distance bounds, else empty
 };
 
+/// The face pairs of two surfaces (overlapping_slots()) and the working memory that finds them.
+struct PairSlots {
+    SlotPairs pairs;
+    SlotWalkScratch walk;
+};
+
+/// The working memory of grouped_inside_tests(), kept from call to call.
+struct GroupingScratch {
+    tbb::enumerable_thread_specific<GroupScratch> groups; ///< per thread, for clear_edge_groups()
+    std::vector<std::pair<Index, Index>> keys;            ///< per pair of candidates: (body, other)
+    PairBuffers<GroupedAnswers> answers;                  ///< per pair of candidates
+    std::vector<std::size_t> slot_pairs_of;               ///< per pair of candidates
+};
+
 /// For each pair (a, b) of `pairs`, overlapping_slots() of a's tree and b's over the overlap of
 /// their boxes when either surface is closed (else none), as TBB tasks.
-std::vector<SlotPairs> overlapping_slot_pairs(const std::vector<ContactSurface>& surfaces,
-                                              const std::vector<std::pair<Index, Index>>& pairs);
+/// @param[out] slot_pairs  one per pair
+void overlapping_slot_pairs(const std::vector<ContactSurface>& surfaces,
+                            const std::vector<std::pair<Index, Index>>& pairs, PairBuffers<PairSlots>& slot_pairs);
 
 /// Exact-mode answers for every candidate vertex, handed over pair by pair: use(k, answers) for
 /// candidates[k].vertices, called once per pair from that pair's TBB task (pairs run in parallel;
@@ -40,8 +57,8 @@ std::vector<SlotPairs> overlapping_slot_pairs(const std::vector<ContactSurface>&
 /// @param[in] slot_pairs  overlapping_slot_pairs() of the pairs (body < other) of `candidates`,
 ///                        in their order
 void grouped_inside_tests(const std::vector<ContactSurface>& surfaces, const std::vector<PairCandidates>& candidates,
-                          const std::vector<SlotPairs>& slot_pairs, const AxisRayTolerances& tolerances,
-                          bool distance_bounds, tbb::enumerable_thread_specific<GroupScratch>& scratch,
+                          const std::vector<PairSlots>& slot_pairs, const AxisRayTolerances& tolerances,
+                          bool distance_bounds, GroupingScratch& scratch,
                           const std::function<void(std::size_t pair, const GroupedAnswers& answers)>& use);
 
 /// The surface distance bound of candidate i of `answers` that was not tested: the bound of its

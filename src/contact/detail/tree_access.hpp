@@ -69,9 +69,22 @@ struct TreeAccess {
     }
 };
 
+/// The working memory of overlapping_slots() on large trees, kept from call to call: the node
+/// pairs from which the walk runs as tasks, and each task's face pairs (never shrinks).
+struct SlotWalkScratch {
+    std::vector<std::array<Index, 2>> tasks, next_level;
+    std::vector<std::vector<std::array<Index, 2>>> parts;
+};
+
 /// AabbTree::overlapping_faces with each face as its slot in its tree (no lookup of its index:
 /// what the grouping takes, whose reads of a face's corners then stay in slot order).
-/// @param[out] slot_pairs  (slot in `a`, slot in `b`), each pair once
+/// @param[out] slot_pairs  (slot in `a`, slot in `b`), each pair once; old content replaced,
+///                         capacity kept
+/// @param[in,out] scratch  working memory
+void overlapping_slots(const AabbTree& a, const AabbTree& b, const Aabb& region,
+                       std::vector<std::array<Index, 2>>& slot_pairs, SlotWalkScratch& scratch);
+
+/// The same with a scratch of its own.
 void overlapping_slots(const AabbTree& a, const AabbTree& b, const Aabb& region,
                        std::vector<std::array<Index, 2>>& slot_pairs);
 

@@ -1,5 +1,6 @@
 #pragma once
-// Adds one 3×3 block of a tet's rotated stiffness to its slot: K'_ij or its transpose, with
+// Adds one 3×3 block of a tet's rotated stiffness to its slot (stored in double, or in float:
+// then each entry is added in double and rounded once): K'_ij or its transpose, with
 // the gradients pre-scaled (L = sλ G, M = sμ G, d = M_j·G_i):
 //   K'_ij[a][b] = L_i[a] G_j[b] + M_j[a] G_i[b] + d δ_ab.
 // Row a of K'_ij is L_i[a] G_j + M_j[a] G_i (+ d e_a); row a of K'_ijᵀ is G_j[a] L_i + G_i[a] M_j
@@ -20,6 +21,24 @@ namespace coro::detail {
 /// The 10 blocks (i, j), i ≤ j, of a tet's symmetric 4×4 block matrix, in target order.
 inline constexpr std::array<std::array<int, 2>, 10> TET_BLOCK_PAIRS{
     {{0, 0}, {0, 1}, {0, 2}, {0, 3}, {1, 1}, {1, 2}, {1, 3}, {2, 2}, {2, 3}, {3, 3}}};
+
+/// Entry by entry, in double: the form every build has (the AVX2 build uses it for float).
+template <class Value>
+inline void add_tet_block_entries(Value* k, int i, int j, bool transposed, const Mat34& g, const Mat34& l,
+                                  const Mat34& m)
+{
+    const double* gi = g.col(i).data();
+    const double* gj = g.col(j).data();
+    const double* li = l.col(i).data();
+    const double* mj = m.col(j).data();
+    const double d = mj[0] * gi[0] + mj[1] * gi[1] + mj[2] * gi[2];
+    for (int a = 0; a < 3; ++a)
+        for (int b = 0; b < 3; ++b) {
+            const double value = li[a] * gj[b] + mj[a] * gi[b] + (a == b ? d : 0.0);
+            Value& entry = k[transposed ? 3 * b + a : 3 * a + b];
+            entry = static_cast<Value>(static_cast<double>(entry) + value);
+        }
+}
 
 #if defined(__AVX2__) && defined(__FMA__)
 
@@ -70,25 +89,23 @@ inline void add_tet_block(double* k, int i, int j, bool transposed, const Mat34&
         add_rows(k, l.col(i).data(), pg.col[j], mj, pg.col[i], d);
 }
 
+inline void add_tet_block(float* k, int i, int j, bool transposed, const Mat34& g, const Mat34& l, const Mat34& m,
+                          const PaddedColumns&, const PaddedColumns&, const PaddedColumns&)
+{
+    add_tet_block_entries(k, i, j, transposed, g, l, m);
+}
+
 #else
 
 struct PaddedColumns {
     explicit PaddedColumns(const Mat34&) {}
 };
 
-inline void add_tet_block(double* k, int i, int j, bool transposed, const Mat34& g, const Mat34& l, const Mat34& m,
+template <class Value>
+inline void add_tet_block(Value* k, int i, int j, bool transposed, const Mat34& g, const Mat34& l, const Mat34& m,
                           const PaddedColumns&, const PaddedColumns&, const PaddedColumns&)
 {
-    const double* gi = g.col(i).data();
-    const double* gj = g.col(j).data();
-    const double* li = l.col(i).data();
-    const double* mj = m.col(j).data();
-    const double d = mj[0] * gi[0] + mj[1] * gi[1] + mj[2] * gi[2];
-    for (int a = 0; a < 3; ++a)
-        for (int b = 0; b < 3; ++b) {
-            const double value = li[a] * gj[b] + mj[a] * gi[b] + (a == b ? d : 0.0);
-            k[transposed ? 3 * b + a : 3 * a + b] += value;
-        }
+    add_tet_block_entries(k, i, j, transposed, g, l, m);
 }
 
 #endif

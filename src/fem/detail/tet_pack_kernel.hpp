@@ -298,6 +298,21 @@ inline void add_corner_forces(const Pack f[4][3], int count, const Corner& corne
 }
 
 /// Adds block `Pair` (TET_BLOCK_PAIRS order) of every lane to block(lane, Pair); see
+/// Adds row-major entries 0..3 (`low`), 4..7 (`high`) and 8 (`last`) to a 3×3 block stored in
+/// double or, rounded after the addition, in float.
+inline void add_block_entries(double* target, Pack low, Pack high, double last)
+{
+    _mm256_storeu_pd(target, add(_mm256_loadu_pd(target), low));
+    _mm256_storeu_pd(target + 4, add(_mm256_loadu_pd(target + 4), high));
+    target[8] += last;
+}
+inline void add_block_entries(float* target, Pack low, Pack high, double last)
+{
+    _mm_storeu_ps(target, _mm256_cvtpd_ps(add(_mm256_cvtps_pd(_mm_loadu_ps(target)), low)));
+    _mm_storeu_ps(target + 4, _mm256_cvtpd_ps(add(_mm256_cvtps_pd(_mm_loadu_ps(target + 4)), high)));
+    target[8] = static_cast<float>(static_cast<double>(target[8]) + last);
+}
+
 /// add_stiffness_blocks. A template so that the block's gradient indices are constants.
 template <int Pair, class BlockSlot>
 inline void add_stiffness_block(const Pack rg[4][3], const Pack l[4][3], const Pack m[4][3], __m256i transposed,
@@ -325,12 +340,8 @@ inline void add_stiffness_block(const Pack rg[4][3], const Pack l[4][3], const P
     transpose4(high[0], high[1], high[2], high[3]);
     alignas(32) double last[LANES]; // entry 8
     _mm256_store_pd(last, k[2][2]);
-    for (int lane = 0; lane < count; ++lane) {
-        double* target = block(lane, Pair);
-        _mm256_storeu_pd(target, add(_mm256_loadu_pd(target), low[lane]));
-        _mm256_storeu_pd(target + 4, add(_mm256_loadu_pd(target + 4), high[lane]));
-        target[8] += last[lane];
-    }
+    for (int lane = 0; lane < count; ++lane)
+        add_block_entries(block(lane, Pair), low[lane], high[lane], last[lane]);
 }
 
 template <class BlockSlot, int... Pair>
@@ -341,7 +352,7 @@ inline void add_stiffness_block_list(const Pack rg[4][3], const Pack l[4][3], co
 }
 
 /// Adds the rotated stiffness blocks K'_ij, i ≤ j in TET_BLOCK_PAIRS order, of lane l to the
-/// row-major 3×3 block at block(l, pair), transposed where bit `pair` of transposed[l] is set,
+/// row-major 3×3 block at block(l, pair) (double* or float*: see add_block_entries), transposed where bit `pair` of transposed[l] is set,
 /// for lanes l < count. K'_ij[a][b] = L_i[a] G_j[b] + M_j[a] G_i[b] + (M_j·G_i) δ_ab with
 /// L = sλ G and M = sμ G (s = stiffness scale × V). A tet's 10 blocks go to 10 different
 /// blocks; two tets of a pack may share one, and then they add in a fixed (pair, lane) order.

@@ -136,6 +136,10 @@ write("case_density_tiny.toml", SIM + BODY + "density = 1e-300\n")
 write("case_dt_tiny.toml", "[simulation]\ndt = 1e-300\nsteps = 2\n\n" + BODY)
 write("case_gravity_huge.toml", "[simulation]\ndt = 0.01\nsteps = 2\ngravity = [0.0, -1e300, 0.0]\n\n" + BODY)
 write("case_contact_stiffness_huge.toml", SIM + "[contact]\nenabled = true\nstiffness = 1e300\n\n" + BODY)
+# Values inside double's range whose stiffness-to-mass ratio dt²(λ+2μ)/(ρh²) loses the mass in the step.
+write("case_density_light.toml", "[simulation]\ndt = 0.01\nsteps = 2\ngravity = [0.0, -9.81, 0.0]\n\n" + BODY +
+      "density = 1e-20\n")
+write("case_young_stiff.toml", SIM + BODY + "young = 1e110\n[[body.fixed]]\nmax = [0.1, 1e9, 1e9]\n")
 write("case_far_from_origin.toml", SIM + BODY + "translate = [1e12, 0.0, 0.0]\n")
 write("case_translate_huge.toml", SIM + BODY + "translate = [1e300, 0.0, 0.0]\n")
 write("case_tolerance_one.toml", SIM + "[solver]\ntolerance = 1.0\n\n" + BODY)
