@@ -13,7 +13,14 @@
 
 namespace coro {
 
-std::vector<FrameBlock> scene_frame(const Scene& scene)
+std::vector<std::string> body_block_names(const Body& body)
+{
+    if (body.embedding().num_points() > 0)
+        return {body.name(), surface_block_name(body.name())};
+    return {body.name()};
+}
+
+std::vector<FrameBlock> body_blocks(const Scene& scene)
 {
     std::vector<FrameBlock> blocks;
     blocks.reserve(scene.bodies.size());
@@ -76,6 +83,30 @@ std::vector<FrameBlock> scene_frame(const Scene& scene)
             blocks.push_back(std::move(surface));
         }
     }
+    return blocks;
+}
+
+std::pair<Vec3, Vec3> rest_bounds(const Scene& scene)
+{
+    Vec3 lo = Vec3::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
+    const auto extend = [&](const auto& points) {
+        if (points.rows() > 0) {
+            lo = lo.cwiseMin(points.colwise().minCoeff().transpose());
+            hi = hi.cwiseMax(points.colwise().maxCoeff().transpose());
+        }
+    };
+    for (const Body& body : scene.bodies)
+        extend(body.mesh().rest_positions);
+    for (const SurfaceMesh& mesh : scene.obstacle_meshes)
+        extend(mesh.vertices);
+    for (const PlaneObstacle& plane : scene.planes)
+        extend(plane.point.transpose());
+    return {lo, hi};
+}
+
+std::vector<FrameBlock> obstacle_blocks(const Scene& scene, const std::pair<Vec3, Vec3>& bounds)
+{
+    std::vector<FrameBlock> blocks;
     for (std::size_t k = 0; k < scene.obstacle_meshes.size(); ++k) {
         FrameBlock block;
         block.name = obstacle_block_name(static_cast<Index>(k));
@@ -83,24 +114,18 @@ std::vector<FrameBlock> scene_frame(const Scene& scene)
         block.tris = scene.obstacle_meshes[k].faces;
         blocks.push_back(std::move(block));
     }
-    if (!scene.planes.empty()) {
-        // Planes are infinite: drawn over the scene's bounds at rest, the same in every frame.
-        Vec3 lo = Vec3::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
-        const auto extend = [&](const auto& points) {
-            if (points.rows() > 0) {
-                lo = lo.cwiseMin(points.colwise().minCoeff().transpose());
-                hi = hi.cwiseMax(points.colwise().maxCoeff().transpose());
-            }
-        };
-        for (const Body& body : scene.bodies)
-            extend(body.mesh().rest_positions);
-        for (const SurfaceMesh& mesh : scene.obstacle_meshes)
-            extend(mesh.vertices);
-        for (const PlaneObstacle& plane : scene.planes)
-            extend(plane.point.transpose());
-        for (std::size_t k = 0; k < scene.planes.size(); ++k)
-            blocks.push_back(detail::plane_patch(scene.planes[k], lo, hi, plane_block_name(static_cast<Index>(k))));
-    }
+    // Planes are infinite: drawn over the scene's bounds at rest, the same in every frame.
+    for (std::size_t k = 0; k < scene.planes.size(); ++k)
+        blocks.push_back(
+            detail::plane_patch(scene.planes[k], bounds.first, bounds.second, plane_block_name(static_cast<Index>(k))));
+    return blocks;
+}
+
+std::vector<FrameBlock> scene_frame(const Scene& scene)
+{
+    std::vector<FrameBlock> blocks = body_blocks(scene);
+    for (FrameBlock& block : obstacle_blocks(scene, rest_bounds(scene)))
+        blocks.push_back(std::move(block));
     return blocks;
 }
 
@@ -117,7 +142,24 @@ std::string summary_json(const RunSummary& summary, const SummaryContext& contex
         << "  \"threads\": " << context.threads << ",\n"
         << "  \"bodies\": " << context.bodies << ",\n"
         << "  \"tets\": " << context.tets << ",\n"
-        << "  \"phases\": {\n"
+        << "  \"ranks\": " << context.ranks << ",\n";
+    double bytes = 0.0;
+    for (const RankLoad& load : context.per_rank)
+        bytes += load.mpi_bytes_per_step;
+    out << "  \"mpi_bytes_per_step\": " << (context.per_rank.empty() ? 0.0 : bytes / context.per_rank.size()) << ",\n";
+    if (!context.per_rank.empty()) {
+        out << "  \"cross_rank_contacts_mean\": " << context.cross_rank_contacts_mean << ",\n"
+            << "  \"per_rank\": [\n";
+        for (std::size_t r = 0; r < context.per_rank.size(); ++r) {
+            const RankLoad& load = context.per_rank[r];
+            out << "    {\"rank\": " << r << ", \"bodies\": " << load.bodies << ", \"tets\": " << load.tets
+                << ", \"mpi_bytes_per_step\": " << load.mpi_bytes_per_step
+                << ", \"solve_bytes_per_step\": " << load.solve_bytes_per_step << "}"
+                << (r + 1 < context.per_rank.size() ? "," : "") << "\n";
+        }
+        out << "  ],\n";
+    }
+    out << "  \"phases\": {\n"
         << "    \"rotation\": " << summary.phases.rotation << ",\n"
         << "    \"assembly\": " << summary.phases.assembly << ",\n"
         << "    \"solve\": " << summary.phases.solve << ",\n"

@@ -100,12 +100,12 @@ std::string to_lower(std::string s)
 
 /// File stems for the blocks of one frame: sanitized, unique even on case-insensitive file
 /// systems ("_2", "_3", ... appended on a clash).
-std::vector<std::string> block_file_stems(const std::vector<FrameBlock>& blocks)
+std::vector<std::string> block_file_stems(const std::vector<std::string>& names)
 {
     std::vector<std::string> stems;
     std::set<std::string> taken; // lower case
-    for (const FrameBlock& b : blocks) {
-        const std::string base = sanitize_file_stem(b.name);
+    for (const std::string& name : names) {
+        const std::string base = sanitize_file_stem(name);
         std::string stem = base;
         for (int k = 2; taken.count(to_lower(stem)) != 0; ++k)
             stem = base + "_" + std::to_string(k);
@@ -341,7 +341,40 @@ fs::path VtkSeriesWriter::pvd_path() const { return m_dir / (m_name + ".pvd"); }
 void VtkSeriesWriter::write_frame(Index step, double time, const std::vector<FrameBlock>& blocks)
 {
     validate_frame(step, time, blocks);
+    std::vector<std::string> names;
+    for (const FrameBlock& block : blocks)
+        names.push_back(block.name);
+    list_written_frame(step, time, names, [&](std::vector<fs::path>& written) {
+        write_block_files(frame_stem(m_name, step), names, blocks, written);
+    });
+}
 
+std::vector<fs::path> VtkSeriesWriter::write_blocks(Index step, const std::vector<std::string>& names,
+                                                    const std::vector<FrameBlock>& blocks) const
+{
+    validate_frame(step, 0.0, blocks);
+    std::vector<fs::path> written;
+    try {
+        write_block_files(frame_stem(m_name, step), names, blocks, written);
+    } catch (...) {
+        std::error_code ec;
+        for (const fs::path& file : written)
+            fs::remove(file, ec);
+        throw;
+    }
+    return written;
+}
+
+void VtkSeriesWriter::list_frame(Index step, double time, const std::vector<std::string>& names)
+{
+    if (!std::isfinite(time))
+        invalid("time of step " + std::to_string(step) + " is not finite");
+    list_written_frame(step, time, names, [](std::vector<fs::path>&) {});
+}
+
+void VtkSeriesWriter::list_written_frame(Index step, double time, const std::vector<std::string>& names,
+                                         FunctionRef<void(std::vector<fs::path>& written)> write_blocks)
+{
     const std::string stem = frame_stem(m_name, step);
     const std::string vtm_file = stem + ".vtm";
     const auto same = std::find_if(m_frames.begin(), m_frames.end(),
@@ -350,7 +383,8 @@ void VtkSeriesWriter::write_frame(Index step, double time, const std::vector<Fra
         // Rewriting a listed step replaces its files one by one, each complete; on failure the
         // object is left as it was.
         std::vector<fs::path> written;
-        write_frame_files(stem, blocks, written);
+        write_blocks(written);
+        write_vtm(stem, names, written);
         const FrameEntry old = *same;
         same->time = time;
         try {
@@ -367,7 +401,8 @@ void VtkSeriesWriter::write_frame(Index step, double time, const std::vector<Fra
     const bool new_dir = !fs::exists(block_dir, ec);
     std::vector<fs::path> written;
     try {
-        write_frame_files(stem, blocks, written);
+        write_blocks(written);
+        write_vtm(stem, names, written);
         m_frames.push_back({time, vtm_file});
         try {
             write_pvd();
@@ -384,8 +419,8 @@ void VtkSeriesWriter::write_frame(Index step, double time, const std::vector<Fra
     }
 }
 
-void VtkSeriesWriter::write_frame_files(const std::string& stem, const std::vector<FrameBlock>& blocks,
-                                        std::vector<fs::path>& written) const
+void VtkSeriesWriter::write_block_files(const std::string& stem, const std::vector<std::string>& names,
+                                        const std::vector<FrameBlock>& blocks, std::vector<fs::path>& written) const
 {
     const fs::path block_dir = m_dir / stem;
     std::error_code ec;
@@ -394,23 +429,30 @@ void VtkSeriesWriter::write_frame_files(const std::string& stem, const std::vect
                block_dir.string() << ": cannot create the frame folder ("
                                   << (ec ? ec.message() : std::string("a file of that name is in the way"))
                                   << ")");
+    const std::vector<std::string> file_stems = block_file_stems(names);
+    for (const FrameBlock& block : blocks) {
+        const auto name = std::find(names.begin(), names.end(), block.name);
+        if (name == names.end())
+            invalid("block '" + block.name + "' of " + stem + " is not among the frame's names");
+        const fs::path file = block_dir / (file_stems[static_cast<std::size_t>(name - names.begin())] + ".vtu");
+        write_vtu(block, file);
+        written.push_back(file);
+    }
+}
 
-    // The blocks first, then the .vtm that references them (the caller writes the .pvd):
-    // whatever is listed is complete.
-    const std::vector<std::string> file_stems = block_file_stems(blocks);
+void VtkSeriesWriter::write_vtm(const std::string& stem, const std::vector<std::string>& names,
+                                std::vector<fs::path>& written) const
+{
+    // After the blocks, and before the caller writes the .pvd: whatever is listed is complete.
+    const std::vector<std::string> file_stems = block_file_stems(names);
     std::ostringstream vtm;
     vtm << "<?xml version=\"1.0\"?>\n"
         << "<VTKFile type=\"vtkMultiBlockDataSet\" version=\"1.0\" byte_order=\"LittleEndian\" "
            "header_type=\"UInt64\">\n"
         << "  <vtkMultiBlockDataSet>\n";
-    for (std::size_t i = 0; i < blocks.size(); ++i) {
-        const std::string file = file_stems[i] + ".vtu";
-        write_vtu(blocks[i], block_dir / file);
-        written.push_back(block_dir / file);
-        vtm << "    <DataSet index=\"" << std::to_string(i) << "\" name=\""
-            << xml_escape(blocks[i].name) << "\" file=\"" << xml_escape(stem + "/" + file)
-            << "\"/>\n";
-    }
+    for (std::size_t i = 0; i < names.size(); ++i)
+        vtm << "    <DataSet index=\"" << std::to_string(i) << "\" name=\"" << xml_escape(names[i])
+            << "\" file=\"" << xml_escape(stem + "/" + file_stems[i] + ".vtu") << "\"/>\n";
     vtm << "  </vtkMultiBlockDataSet>\n"
         << "</VTKFile>\n";
     write_file_atomically(m_dir / (stem + ".vtm"), vtm.str(), Sync::NONE);

@@ -1,11 +1,13 @@
 // The corocontact command: run a case, detect contacts, describe a mesh or a surface.
 // Exit codes: 0 success, 2 bad input, 3 the simulation diverged, 4 the output could not be
-// written (or its folder is in use by another run).
+// written (or its folder is in use by another run). Under mpirun (CORO_WITH_MPI) a run is
+// distributed over the processes; they all exit with the same code, rank 0 alone prints.
 
 #include "progress.hpp"
 
 #include <corocontact/config.hpp>
 #include <corocontact/core/atomic_file.hpp>
+#include <corocontact/core/collective.hpp>
 #include <corocontact/core/error.hpp>
 #include <corocontact/core/surface_mesh.hpp>
 #include <corocontact/core/surface_topology.hpp>
@@ -13,6 +15,7 @@
 #include <corocontact/io/mesh_readers.hpp>
 #include <corocontact/io/output_file.hpp>
 #include <corocontact/io/output_lock.hpp>
+#include <corocontact/io/rank_output.hpp>
 #include <corocontact/io/run_files.hpp>
 #include <corocontact/io/scene_loader.hpp>
 #include <corocontact/io/scene_output.hpp>
@@ -20,10 +23,14 @@
 #include <corocontact/io/vtk_series.hpp>
 #include <corocontact/sim/checkpoint.hpp>
 #include <corocontact/sim/interrupt.hpp>
+#include <corocontact/sim/rank_checkpoint.hpp>
 #include <corocontact/sim/run_notes.hpp>
 #include <corocontact/sim/scene_contact.hpp>
 #if CORO_WITH_EMBREE
 #include <corocontact/embree/embree_detector.hpp>
+#endif
+#if CORO_WITH_MPI
+#include <corocontact/mpi/mpi_session.hpp>
 #endif
 #include <corocontact/partition/part_layout.hpp>
 #include <corocontact/partition/partition.hpp>
@@ -110,6 +117,13 @@ std::string frame_file(const std::string& name, coro::Index step)
     return name + "_" + std::string(digits.size() < 6 ? 6 - digits.size() : 0, '0') + digits + ".vtm";
 }
 
+/// A stream that writes nothing: what processes other than rank 0 print to.
+std::ostream& null_stream()
+{
+    static std::ostream null(nullptr);
+    return null;
+}
+
 const char* signal_name(int signal_number)
 {
     return signal_number == SIGINT ? "SIGINT" : signal_number == SIGTERM ? "SIGTERM" : "a signal";
@@ -143,53 +157,84 @@ void write_stdout(const std::string& text)
     flush_stdout();
 }
 
-int run_case(const RunOptions& options)
+/// Runs a case; `ranks` is null in one process, else the processes of a distributed run
+/// (docs/scale_out.md): each holds its bodies, rank 0 alone prints and holds the output lock,
+/// and every step, frame and checkpoint is collective, a failure anywhere throwing on every
+/// process.
+int run_case(const RunOptions& options, coro::Communicator* ranks)
 {
     const auto setup_start = std::chrono::steady_clock::now();
-    coro::cli::Progress progress(!options.quiet, isatty(STDERR_FILENO) != 0);
-    std::vector<std::string> notes;
-    coro::CaseSpec spec = coro::read_case(options.case_file, notes);
-    for (const std::string& note : notes)
-        std::cerr << "note: " << note << "\n";
-    if (!options.out.empty())
-        spec.simulation.output_dir = options.out;
-    if (options.steps > 0) {
-        CORO_CHECK(spec.simulation.analysis == coro::Analysis::DYNAMIC, InputError,
-                   "--steps " << options.steps << ": " << options.case_file
-                              << " is a static analysis, whose steps are simulation.load_steps; --steps sets the "
-                                 "time steps of a dynamic one");
-        spec.simulation.steps = static_cast<coro::Index>(options.steps); // the option's range is an Index's
-    }
+    const bool root = ranks == nullptr || ranks->rank() == 0;
+    coro::cli::Progress progress(!options.quiet && root, isatty(STDERR_FILENO) != 0);
+    std::ostream& messages = root ? std::cerr : null_stream();
+    coro::CaseSpec spec;
+    coro::run_collectively(ranks, [&] {
+        std::vector<std::string> notes;
+        spec = coro::read_case(options.case_file, notes);
+        for (const std::string& note : notes)
+            messages << "note: " << note << "\n";
+        if (!options.out.empty())
+            spec.simulation.output_dir = options.out;
+        if (options.steps > 0) {
+            CORO_CHECK(spec.simulation.analysis == coro::Analysis::DYNAMIC, InputError,
+                       "--steps " << options.steps << ": " << options.case_file
+                                  << " is a static analysis, whose steps are simulation.load_steps; --steps sets "
+                                     "the time steps of a dynamic one");
+            spec.simulation.steps = static_cast<coro::Index>(options.steps); // the option's range is an Index's
+        }
+        // AMG's hierarchy is built from one process's whole matrix; a distributed scene has its
+        // rows on several.
+        CORO_CHECK(ranks == nullptr || ranks->size() == 1 ||
+                       spec.solver.preconditioner != coro::PcgPreconditioner::AMG,
+                   InputError,
+                   options.case_file << ": solver.preconditioner = \"amg\" runs in one process only, and this run "
+                                        "has "
+                                     << ranks->size()
+                                     << " (mpirun): use \"block_jacobi\" or \"jacobi\" for a distributed run");
+    });
     const auto checkpoint_every = static_cast<coro::Index>(options.checkpoint_every);
     // One run per output folder, claimed before the (possibly long) load; a run refused for bad
     // input removes its lock file again, and the folder if it made it.
     const std::filesystem::path& out_dir = spec.simulation.output_dir;
-    const coro::OutputLock lock(out_dir, "corocontact run " + options.case_file);
-    if (!lock.stale_owner().empty())
-        std::cerr << "warning: " << lock.path().string() << ": taking over the lock of a run that ended without "
-                  << "removing it (" << lock.stale_owner() << ")\n";
+    std::unique_ptr<coro::OutputLock> lock;
+    coro::run_collectively(ranks, [&] {
+        if (root)
+            lock = std::make_unique<coro::OutputLock>(out_dir, "corocontact run " + options.case_file);
+    });
+    if (lock && !lock->stale_owner().empty())
+        messages << "warning: " << lock->path().string() << ": taking over the lock of a run that ended without "
+                 << "removing it (" << lock->stale_owner() << ")\n";
 
     // Everything is loaded and checked before anything but the lock file is written there.
-    coro::LoadedScene loaded = coro::load_scene(spec, [&](const std::string& stage) { progress.status(stage); });
+    coro::LoadedScene loaded;
+    coro::run_collectively(ranks, [&] {
+        loaded = coro::load_scene(spec, [&](const std::string& stage) { progress.status(stage); });
+    });
     coro::Scene& scene = loaded.scene;
+    const auto case_bodies = static_cast<coro::Index>(scene.bodies.size());
+    const coro::Index case_tets = scene.num_tets(), case_nodes = scene.num_vertices();
+    coro::SceneDistribution distribution;
+    if (ranks)
+        distribution = coro::distribute_scene(scene, *ranks);
     if (coro::contact_applies(spec))
         progress.status("contact surfaces and their AABB trees");
-    coro::Simulation simulation(scene, spec);
+    coro::Simulation simulation(scene, spec, ranks ? &distribution : nullptr);
     progress.clear();
     for (const std::string& warning : loaded.warnings)
-        std::cerr << "warning: " << warning << "\n";
+        messages << "warning: " << warning << "\n";
     if (const auto note = coro::contact_not_applied_note(spec))
-        std::cerr << *note << "\n";
+        messages << *note << "\n";
     if (!spec.contact.enabled && !spec.obstacles.empty())
-        std::cerr << "warning: " << spec.obstacles.front().location << ": the obstacles have no effect, because "
-                  << "contact.enabled is false (set enabled = true in [contact])\n";
+        messages << "warning: " << spec.obstacles.front().location << ": the obstacles have no effect, because "
+                 << "contact.enabled is false (set enabled = true in [contact])\n";
 
     const int threads = threads_used();
     if (!options.quiet)
-        std::cerr << "corocontact " << CORO_VERSION << ": " << spec.simulation.name << ", "
-                  << count_of(scene.bodies.size(), "body", "bodies") << ", " << scene.num_tets() << " tets, "
-                  << scene.num_vertices() << " nodes, " << count_of(static_cast<std::size_t>(threads), "thread", "threads")
-                  << "\n";
+        messages << "corocontact " << CORO_VERSION << ": " << spec.simulation.name << ", "
+                 << count_of(static_cast<std::size_t>(case_bodies), "body", "bodies") << ", " << case_tets
+                 << " tets, " << case_nodes << " nodes, "
+                 << count_of(static_cast<std::size_t>(threads), "thread", "threads")
+                 << (ranks ? " on each of " + std::to_string(ranks->size()) + " processes" : std::string()) << "\n";
 
     const coro::Index last_step =
         spec.simulation.analysis == coro::Analysis::STATIC ? spec.simulation.load_steps : spec.simulation.steps;
@@ -200,9 +245,14 @@ int run_case(const RunOptions& options)
     std::vector<coro::FrameRecord> frames; // written so far, the first run's included
     if (!options.restart.empty()) {
         std::vector<std::string> warnings;
-        coro::CheckpointState state = coro::read_checkpoint(options.restart, scene, fingerprint, warnings);
+        coro::CheckpointState state;
+        coro::run_collectively(ranks, [&] {
+            state = ranks ? coro::read_checkpoint(options.restart, scene, distribution.body_ids, case_bodies,
+                                                  fingerprint, warnings)
+                          : coro::read_checkpoint(options.restart, scene, fingerprint, warnings);
+        });
         for (const std::string& warning : warnings)
-            std::cerr << "warning: " << warning << "\n";
+            messages << "warning: " << warning << "\n";
         CORO_CHECK(state.step < last_step, InputError,
                    options.restart << ": the checkpoint is at step " << state.step << ", the case ends at step "
                                    << last_step << " (nothing to continue; give a later --steps)");
@@ -216,33 +266,46 @@ int run_case(const RunOptions& options)
                 ++missing;
         }
         if (missing > 0)
-            std::cerr << "warning: " << missing << " of the " << state.frames.size()
+            messages << "warning: " << missing << " of the " << state.frames.size()
                       << " frames the first run wrote up to step " << state.step << " are not in "
                       << spec.simulation.output_dir.string() << "; the series lists only the others\n";
         if (!options.quiet)
-            std::cerr << "continuing from step " << state.step << " (" << options.restart << ")\n";
+            messages << "continuing from step " << state.step << " (" << options.restart << ")\n";
     }
 
     // What an earlier run of this series left goes (a restart keeps its frames up to the
     // checkpoint), so no old summary or frame stands beside this run's series.
-    const coro::RemovedFiles removed = coro::remove_earlier_run(out_dir, spec.simulation.name,
-                                                                options.restart.empty() ? -1 : control.resume_step,
-                                                                !options.restart.empty());
+    coro::RemovedFiles removed;
+    std::unique_ptr<coro::VtkSeriesWriter> writer;
+    coro::run_collectively(ranks, [&] {
+        if (root) // rank 0 clears the folder before any process writes in it
+            removed = coro::remove_earlier_run(out_dir, spec.simulation.name,
+                                               options.restart.empty() ? -1 : control.resume_step,
+                                               !options.restart.empty());
+    });
     if (removed.files > 0 && !options.quiet)
-        std::cerr << "removed " << removed.files << " files (" << removed.frames << " frames) of an earlier run of "
-                  << spec.simulation.name << " from " << out_dir.string()
-                  << (removed.checkpoint ? ", its checkpoint among them (a run without --restart starts over)" : "")
-                  << "\n";
-    coro::VtkSeriesWriter writer(out_dir, spec.simulation.name);
-    for (const coro::FrameRecord& frame : frames)
-        writer.adopt_frame(frame.step, frame.time);
-    if (!frames.empty())
-        writer.write_pvd();
+        messages << "removed " << removed.files << " files (" << removed.frames << " frames) of an earlier run of "
+                 << spec.simulation.name << " from " << out_dir.string()
+                 << (removed.checkpoint ? ", its checkpoint among them (a run without --restart starts over)" : "")
+                 << "\n";
+    coro::run_collectively(ranks, [&] {
+        writer = std::make_unique<coro::VtkSeriesWriter>(out_dir, spec.simulation.name);
+        for (const coro::FrameRecord& frame : frames)
+            writer->adopt_frame(frame.step, frame.time);
+        if (!frames.empty() && root)
+            writer->write_pvd();
+    });
+    std::unique_ptr<coro::RankFrames> rank_frames;
+    if (ranks)
+        rank_frames = std::make_unique<coro::RankFrames>(*ranks, *writer, scene, distribution.body_ids);
     const auto checkpoint_path = coro::checkpoint_path(out_dir, spec.simulation.name);
     if (checkpoints) {
         control.checkpoint_every = checkpoint_every;
         control.on_checkpoint = [&](coro::Index step, const coro::RunSummary& so_far) {
-            coro::write_checkpoint(checkpoint_path, scene, {step, so_far, frames}, fingerprint);
+            if (ranks)
+                coro::write_checkpoint(checkpoint_path, scene, distribution, {step, so_far, frames}, fingerprint);
+            else
+                coro::write_checkpoint(checkpoint_path, scene, {step, so_far, frames}, fingerprint);
         };
     }
     coro::install_stop_signal_handlers();
@@ -254,7 +317,10 @@ int run_case(const RunOptions& options)
     const coro::RunSummary summary = simulation.run(
         last_step,
         [&](coro::Index step, double time) {
-            writer.write_frame(step, time, coro::scene_frame(scene));
+            if (rank_frames)
+                rank_frames->write(step, time, scene);
+            else
+                writer->write_frame(step, time, coro::scene_frame(scene));
             frames.push_back({step, time});
         },
         [&](coro::Index done, coro::Index total) { progress.update(done, total); }, control);
@@ -264,11 +330,23 @@ int run_case(const RunOptions& options)
     context.name = spec.simulation.name;
     context.threads = threads;
     context.setup_s = setup_s;
-    context.bodies = static_cast<coro::Index>(scene.bodies.size());
-    context.tets = scene.num_tets();
+    context.bodies = case_bodies;
+    context.tets = case_tets;
     context.peak_rss_mb = peak_rss_mb();
+    const coro::RankStats rank_stats = simulation.rank_stats();
+    context.ranks = rank_stats.ranks;
+    context.cross_rank_contacts_mean = rank_stats.cross_rank_contacts_mean;
+    if (ranks) {
+        context.per_rank = coro::gather_rank_loads(*ranks, scene, rank_stats);
+        ranks->all_reduce(&context.peak_rss_mb, 1, coro::Reduction::MAX);
+    }
     const auto summary_path = coro::summary_path(out_dir, spec.simulation.name);
-    coro::write_file_atomically(summary_path, coro::summary_json(summary, context));
+    coro::run_collectively(ranks, [&] {
+        if (root)
+            coro::write_file_atomically(summary_path, coro::summary_json(summary, context));
+    });
+    if (!root)
+        return summary.stop_signal != 0 ? EXIT_SIGNAL_BASE + summary.stop_signal : 0;
 
     const auto& p = summary.phases;
     const double total = std::max(p.total(), 1e-300);
@@ -277,6 +355,15 @@ int run_case(const RunOptions& options)
                 count_of(static_cast<std::size_t>(summary.steps), "step", "steps").c_str(), summary.wall_s,
                 summary.steps_per_s,
                 count_of(static_cast<std::size_t>(threads), "thread", "threads").c_str(), setup_s);
+    if (ranks) {
+        std::printf("  %d processes (MPI), bodies/tets per process:", ranks->size());
+        for (const coro::RankLoad& load : context.per_rank)
+            std::printf(" %d/%d", static_cast<int>(load.bodies), static_cast<int>(load.tets));
+        std::printf("; received per step and process:");
+        for (const coro::RankLoad& load : context.per_rank)
+            std::printf(" %.0f", load.mpi_bytes_per_step);
+        std::printf(" B; %.1f contact points per detection across processes\n", context.cross_rank_contacts_mean);
+    }
     std::printf("  phases [s]: rotation %.3f (%.0f%%), assembly %.3f (%.0f%%), solve %.3f (%.0f%%), "
                 "contact %.3f (%.0f%%), output %.3f (%.0f%%)\n",
                 p.rotation, 100 * p.rotation / total, p.assembly, 100 * p.assembly / total, p.solve,
@@ -305,8 +392,9 @@ int run_case(const RunOptions& options)
                     static_cast<int>(summary.static_not_converged));
     if (const auto warning = coro::iteration_cap_warning(summary, spec.solver))
         std::printf("  %s\n", warning->c_str());
-    std::printf("  peak memory %.1f MB\n  series: %s\n  summary: %s\n", context.peak_rss_mb,
-                writer.pvd_path().string().c_str(), summary_path.string().c_str());
+    std::printf("  peak memory %.1f MB%s\n  series: %s\n  summary: %s\n", context.peak_rss_mb,
+                ranks ? " (the largest process)" : "", writer->pvd_path().string().c_str(),
+                summary_path.string().c_str());
     if (checkpoints)
         std::printf("  checkpoint: %s\n", checkpoint_path.string().c_str());
     flush_stdout();
@@ -495,6 +583,22 @@ int describe_mesh(const std::string& path, int parts)
 
 int main(int argc, char** argv)
 {
+#if CORO_WITH_MPI
+    // Started by mpirun: the processes of a distributed run (docs/scale_out.md); alone: no MPI.
+    std::unique_ptr<coro::MpiSession> session;
+    try {
+        session = std::make_unique<coro::MpiSession>(argc, argv);
+    } catch (const std::exception& error) {
+        std::cerr << "error: " << error.what() << "\n";
+        return EXIT_BAD_INPUT;
+    }
+    coro::Communicator* world = session->communicator();
+#else
+    coro::Communicator* world = nullptr;
+#endif
+    coro::Communicator* ranks = world != nullptr && world->size() > 1 ? world : nullptr;
+    const bool root = ranks == nullptr || ranks->rank() == 0; // the one process that prints
+
     CLI::App app{"corocontact: co-rotational FEM bodies in contact"};
     app.set_version_flag("--version", std::string("corocontact ") + CORO_VERSION);
     app.require_subcommand(1);
@@ -554,9 +658,11 @@ int main(int argc, char** argv)
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& error) {
-        std::ostringstream help; // --help, --version: written to stdout, checked
-        if (app.exit(error, help) != 0)
+        std::ostringstream help; // --help, --version: written to stdout (by rank 0), checked
+        if (app.exit(error, help, root ? std::cerr : null_stream()) != 0)
             return EXIT_BAD_INPUT;
+        if (!root)
+            return 0;
         try {
             write_stdout(help.str());
         } catch (const coro::OutputError& output_error) {
@@ -573,39 +679,51 @@ int main(int argc, char** argv)
     if (threads > 0) {
         thread_limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,
                                                              static_cast<std::size_t>(threads));
-        if (threads_used() < threads)
+        if (threads_used() < threads && root)
             std::cerr << "note: --threads " << threads << ": this machine runs at most " << threads_used()
                       << " threads at once; using " << threads_used() << "\n";
     }
-    try {
-        int code = 0;
-        if (run_command->parsed()) {
-            code = run_case(run);
-        } else if (detect_command->parsed()) {
-            code = detect_case(detect);
-        } else if (is_surface_file(mesh_path)) {
-            CORO_CHECK(parts == 0, InputError,
-                       "--parts: " << mesh_path << " is a triangle surface; METIS parts are for tet meshes");
-            code = describe_surface(mesh_path);
-        } else {
-            code = describe_mesh(mesh_path, parts);
+    std::ostream& errors = root ? std::cerr : null_stream();
+    const auto dispatch = [&]() -> int {
+        try {
+            int code = 0;
+            if (run_command->parsed()) {
+                code = run_case(run, ranks);
+            } else if (detect_command->parsed()) {
+                code = detect_case(detect);
+            } else if (is_surface_file(mesh_path)) {
+                CORO_CHECK(parts == 0, InputError,
+                           "--parts: " << mesh_path << " is a triangle surface; METIS parts are for tet meshes");
+                code = describe_surface(mesh_path);
+            } else {
+                code = describe_mesh(mesh_path, parts);
+            }
+            flush_stdout();
+            return code;
+        } catch (const coro::InputError& error) {
+            errors << "error: " << error.what() << "\n";
+            return EXIT_BAD_INPUT;
+        } catch (const coro::OutputError& error) {
+            errors << "error: " << error.what() << "\n";
+            return EXIT_OUTPUT_FAILED;
+        } catch (const coro::NumericalError& error) {
+            errors << "error: the simulation diverged: " << error.what() << "\n";
+            return EXIT_DIVERGED;
+        } catch (const std::exception& error) {
+            // Not one of ours (e.g. std::bad_alloc from a library reading a corrupt file): still a
+            // message and the bad-input code rather than an abort.
+            errors << "error: " << error.what() << "\n";
+            return EXIT_BAD_INPUT;
         }
-        flush_stdout();
-        return code;
-    } catch (const coro::InputError& error) {
-        std::cerr << "error: " << error.what() << "\n";
-        return EXIT_BAD_INPUT;
-    } catch (const coro::OutputError& error) {
-        std::cerr << "error: " << error.what() << "\n";
-        return EXIT_OUTPUT_FAILED;
-    } catch (const coro::NumericalError& error) {
-        std::cerr << "error: the simulation diverged: " << error.what() << "\n";
-        return EXIT_DIVERGED;
-    } catch (const std::exception& error) {
-        // Not one of ours (e.g. std::bad_alloc from a library reading a corrupt file): still a
-        // message and the bad-input code rather than an abort.
-        std::cerr << "error: " << error.what() << "\n";
-        return EXIT_BAD_INPUT;
+    };
+    if (ranks != nullptr && !run_command->parsed()) {
+        // detect and info run on rank 0; the others end with its exit code.
+        std::vector<char> code(1, 0);
+        if (root)
+            code[0] = static_cast<char>(dispatch());
+        ranks->broadcast(code, 0);
+        return code[0];
     }
+    return dispatch();
 }
 

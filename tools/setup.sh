@@ -30,6 +30,7 @@ packages=(
   libvtk9-dev libcli11-dev libtomlplusplus-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   petsc-dev libhypre-dev   # the AMG preconditioner (PETSc GAMG) and bench_amg's hypre
+  libopenmpi-dev openmpi-bin   # runs over several processes (CORO_WITH_MPI)
   calculix-ccx python3-matplotlib
   python3-vtk9 python3-numpy xvfb xauth libgl1-mesa-dri
   pybind11-dev python3-pybind11 python3-dev python3-pytest

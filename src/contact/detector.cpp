@@ -1,6 +1,7 @@
 #include <corocontact/contact/detector.hpp>
 
 #include <corocontact/contact/broad_phase.hpp>
+#include <corocontact/core/error.hpp>
 
 #include "detail/detection_pass.hpp"
 #include "detail/detection_state.hpp"
@@ -121,6 +122,53 @@ const std::vector<PairCandidates>& find_candidates(const std::vector<ContactSurf
     return pair_candidates(surfaces, mode, state);
 }
 
+/// Mid phase and narrow phase of the broad phase's state.pairs, into points.
+void detect_pairs(const std::vector<ContactSurface>& surfaces, const DetectionSettings& settings,
+                  detail::DetectionState& state, std::vector<ContactPoint>& points, DetectionStats* stats)
+{
+    if (!settings.share_answers || settings.mode != DetectionMode::EXACT) {
+        const std::vector<PairCandidates>& candidates = pair_candidates(surfaces, settings.mode, state);
+        run_detection(
+            surfaces, candidates,
+            [&](std::size_t k, const Vec3* positions, Index count, InsideTest* results) {
+                const PairCandidates& pair = candidates[k];
+                detail::inside_tests(surfaces[static_cast<std::size_t>(pair.other)], positions, count, settings.mode,
+                                     pair.faces, settings.tolerances, results);
+            },
+            settings.contact_data, state, stats, points);
+        return;
+    }
+
+    // The mid phase and the face pairs of the groups need only the broad phase: one parallel
+    // phase for both.
+    tbb::parallel_invoke([&] { pair_candidates(surfaces, settings.mode, state); },
+                         [&] { detail::overlapping_slot_pairs(surfaces, state.pairs, state.slot_pairs); });
+    const std::vector<PairCandidates>& candidates = state.candidates.items();
+    // Each pair's answers are taken in its own task, as they come; with depth searches to do,
+    // its blocks are nested tasks.
+    DetectionPass pass(surfaces, candidates, settings.contact_data, state);
+    detail::grouped_inside_tests(
+        surfaces, candidates, state.slot_pairs.items(), settings.tolerances, settings.contact_data, state.grouping,
+        [&](std::size_t k, const detail::GroupedAnswers& answers) {
+            const auto n = static_cast<Index>(answers.group.size());
+            const Index blocks = (n + VERTEX_BLOCK - 1) / VERTEX_BLOCK;
+            const auto take_block = [&](Index b) {
+                const Index first = b * VERTEX_BLOCK;
+                pass.take(k, first, std::min(VERTEX_BLOCK, n - first), answers);
+            };
+            if (!pass.contact_data() || blocks <= 1) {
+                for (Index b = 0; b < blocks; ++b)
+                    take_block(b);
+                return;
+            }
+            tbb::parallel_for(tbb::blocked_range<Index>(0, blocks, 1), [&](const tbb::blocked_range<Index>& r) {
+                for (Index b = r.begin(); b < r.end(); ++b)
+                    take_block(b);
+            });
+        });
+    pass.finish(count_pairs(candidates), stats, points);
+}
+
 } // namespace
 
 std::vector<PairCandidates> contact_candidates(const std::vector<ContactSurface>& surfaces, DetectionMode mode)
@@ -155,48 +203,21 @@ void detect_contacts(const std::vector<ContactSurface>& surfaces, const Detectio
                      DetectionScratch& scratch, std::vector<ContactPoint>& points, DetectionStats* stats)
 {
     detail::DetectionState& state = detail::ScratchAccess::state(scratch);
-    if (!settings.share_answers || settings.mode != DetectionMode::EXACT) {
-        const std::vector<PairCandidates>& candidates = find_candidates(surfaces, settings.mode, state);
-        run_detection(
-            surfaces, candidates,
-            [&](std::size_t k, const Vec3* positions, Index count, InsideTest* results) {
-                const PairCandidates& pair = candidates[k];
-                detail::inside_tests(surfaces[static_cast<std::size_t>(pair.other)], positions, count, settings.mode,
-                                     pair.faces, settings.tolerances, results);
-            },
-            settings.contact_data, state, stats, points);
-        return;
-    }
-
-    // The mid phase and the face pairs of the groups need only the broad phase: one parallel
-    // phase for both.
     overlapping_surfaces(surfaces, state);
-    tbb::parallel_invoke([&] { pair_candidates(surfaces, settings.mode, state); },
-                         [&] { detail::overlapping_slot_pairs(surfaces, state.pairs, state.slot_pairs); });
-    const std::vector<PairCandidates>& candidates = state.candidates.items();
-    // Each pair's answers are taken in its own task, as they come; with depth searches to do,
-    // its blocks are nested tasks.
-    DetectionPass pass(surfaces, candidates, settings.contact_data, state);
-    detail::grouped_inside_tests(
-        surfaces, candidates, state.slot_pairs.items(), settings.tolerances, settings.contact_data, state.grouping,
-        [&](std::size_t k, const detail::GroupedAnswers& answers) {
-            const auto n = static_cast<Index>(answers.group.size());
-            const Index blocks = (n + VERTEX_BLOCK - 1) / VERTEX_BLOCK;
-            const auto take_block = [&](Index b) {
-                const Index first = b * VERTEX_BLOCK;
-                pass.take(k, first, std::min(VERTEX_BLOCK, n - first), answers);
-            };
-            if (!pass.contact_data() || blocks <= 1) {
-                for (Index b = 0; b < blocks; ++b)
-                    take_block(b);
-                return;
-            }
-            tbb::parallel_for(tbb::blocked_range<Index>(0, blocks, 1), [&](const tbb::blocked_range<Index>& r) {
-                for (Index b = r.begin(); b < r.end(); ++b)
-                    take_block(b);
-            });
-        });
-    pass.finish(count_pairs(candidates), stats, points);
+    detect_pairs(surfaces, settings, state, points, stats);
+}
+
+std::vector<ContactPoint> detect_contacts(const std::vector<ContactSurface>& surfaces,
+                                          const std::vector<std::pair<Index, Index>>& pairs,
+                                          const DetectionSettings& settings, DetectionScratch& scratch,
+                                          DetectionStats* stats)
+{
+    CORO_ASSERT(std::is_sorted(pairs.begin(), pairs.end()));
+    detail::DetectionState& state = detail::ScratchAccess::state(scratch);
+    state.pairs = pairs;
+    std::vector<ContactPoint> points;
+    detect_pairs(surfaces, settings, state, points, stats);
+    return points;
 }
 
 std::vector<ContactPoint> detect_contacts(const std::vector<ContactSurface>& surfaces,

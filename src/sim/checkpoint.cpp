@@ -92,6 +92,11 @@ public:
         return values;
     }
     std::size_t position() const { return m_pos; }
+    void skip(std::size_t size, const char* what)
+    {
+        need(size, what);
+        m_pos += size;
+    }
 
 private:
     void need(std::size_t size, const char* what) const
@@ -154,20 +159,50 @@ std::uint64_t case_fingerprint(const CaseSpec& spec)
     return fnv1a(bytes.data(), bytes.size());
 }
 
+CheckpointBody checkpoint_body(const Body& body)
+{
+    Writer entry;
+    entry.put_string(body.name());
+    entry.put<std::int64_t>(body.num_vertices());
+    entry.put<std::int64_t>(body.mesh().num_tets());
+    entry.put<std::int64_t>(body.fem().layout().num_parts);
+    // Mesh file order, so the file does not depend on the internal numbering.
+    Writer state;
+    const Index n = body.num_vertices(), n_tets = body.mesh().num_tets();
+    std::vector<double> nodes(at(3 * n));
+    for (const VecX* values : {&body.positions(), &body.velocities()}) {
+        for (Index v = 0; v < n; ++v)
+            for (int d = 0; d < 3; ++d)
+                nodes[at(3 * body.input_node(v) + d)] = (*values)[3 * v + d];
+        state.put_bytes(reinterpret_cast<const char*>(nodes.data()), nodes.size() * sizeof(double));
+    }
+    std::vector<double> rotations(at(9 * n_tets));
+    const std::vector<Mat3>& r = body.fem().rotations();
+    for (Index t = 0; t < n_tets; ++t)
+        std::memcpy(rotations.data() + 9 * at(body.input_tet(t)), r[at(t)].data(), 9 * sizeof(double));
+    state.put_bytes(reinterpret_cast<const char*>(rotations.data()), rotations.size() * sizeof(double));
+    return {std::move(entry.bytes()), std::move(state.bytes())};
+}
+
 void write_checkpoint(const fs::path& path, const Scene& scene, const CheckpointState& state,
+                      std::uint64_t fingerprint)
+{
+    std::vector<CheckpointBody> bodies;
+    for (const Body& body : scene.bodies)
+        bodies.push_back(checkpoint_body(body));
+    write_checkpoint(path, bodies, state, fingerprint);
+}
+
+void write_checkpoint(const fs::path& path, const std::vector<CheckpointBody>& bodies, const CheckpointState& state,
                       std::uint64_t fingerprint)
 {
     Writer w;
     w.put_bytes(MAGIC, sizeof MAGIC);
     w.put(VERSION);
     w.put(fingerprint);
-    w.put<std::uint64_t>(scene.bodies.size());
-    for (const Body& body : scene.bodies) {
-        w.put_string(body.name());
-        w.put<std::int64_t>(body.num_vertices());
-        w.put<std::int64_t>(body.mesh().num_tets());
-        w.put<std::int64_t>(body.fem().layout().num_parts);
-    }
+    w.put<std::uint64_t>(bodies.size());
+    for (const CheckpointBody& body : bodies)
+        w.put_bytes(body.entry.data(), body.entry.size());
     w.put<std::int64_t>(state.step);
     put_summary(w, state.summary);
     w.put<std::uint64_t>(state.frames.size());
@@ -175,22 +210,8 @@ void write_checkpoint(const fs::path& path, const Scene& scene, const Checkpoint
         w.put<std::int64_t>(frame.step);
         w.put(frame.time);
     }
-    for (const Body& body : scene.bodies) {
-        // Mesh file order, so the file does not depend on the internal numbering.
-        const Index n = body.num_vertices(), n_tets = body.mesh().num_tets();
-        std::vector<double> nodes(at(3 * n));
-        for (const VecX* values : {&body.positions(), &body.velocities()}) {
-            for (Index v = 0; v < n; ++v)
-                for (int d = 0; d < 3; ++d)
-                    nodes[at(3 * body.input_node(v) + d)] = (*values)[3 * v + d];
-            w.put_bytes(reinterpret_cast<const char*>(nodes.data()), nodes.size() * sizeof(double));
-        }
-        std::vector<double> rotations(at(9 * n_tets));
-        const std::vector<Mat3>& r = body.fem().rotations();
-        for (Index t = 0; t < n_tets; ++t)
-            std::memcpy(rotations.data() + 9 * at(body.input_tet(t)), r[at(t)].data(), 9 * sizeof(double));
-        w.put_bytes(reinterpret_cast<const char*>(rotations.data()), rotations.size() * sizeof(double));
-    }
+    for (const CheckpointBody& body : bodies)
+        w.put_bytes(body.state.data(), body.state.size());
     w.put_bytes(END, sizeof END);
     w.put(fnv1a(w.bytes().data(), w.bytes().size()));
 
@@ -199,6 +220,15 @@ void write_checkpoint(const fs::path& path, const Scene& scene, const Checkpoint
 
 CheckpointState read_checkpoint(const fs::path& path, Scene& scene, std::uint64_t fingerprint,
                                 std::vector<std::string>& warnings)
+{
+    std::vector<Index> ids(scene.bodies.size());
+    for (std::size_t b = 0; b < ids.size(); ++b)
+        ids[b] = static_cast<Index>(b);
+    return read_checkpoint(path, scene, ids, static_cast<Index>(ids.size()), fingerprint, warnings);
+}
+
+CheckpointState read_checkpoint(const fs::path& path, Scene& scene, const std::vector<Index>& body_ids,
+                                Index case_bodies, std::uint64_t fingerprint, std::vector<std::string>& warnings)
 {
     const std::string bytes = read_all(path, "checkpoint");
     const std::string where = path.string();
@@ -220,12 +250,24 @@ CheckpointState read_checkpoint(const fs::path& path, Scene& scene, std::uint64_
     CORO_CHECK(r.get<std::uint64_t>("fingerprint") == fingerprint, InputError,
                where << ": the checkpoint was written by another case file (or the case file changed since)");
     const std::size_t n_bodies = r.get_count(0, "body");
-    CORO_CHECK(n_bodies == scene.bodies.size(), InputError,
-               where << ": the checkpoint holds " << n_bodies << " bodies, the case has " << scene.bodies.size());
-    for (const Body& body : scene.bodies) {
+    CORO_CHECK(n_bodies == at(case_bodies), InputError,
+               where << ": the checkpoint holds " << n_bodies << " bodies, the case has " << case_bodies);
+    // The scene's bodies are the case's body_ids (ascending); the others' states are skipped.
+    std::vector<Index> local(n_bodies, -1);
+    for (std::size_t l = 0; l < body_ids.size(); ++l)
+        local[at(body_ids[l])] = static_cast<Index>(l);
+    std::vector<std::size_t> state_sizes(n_bodies);
+    for (std::size_t k = 0; k < n_bodies; ++k) {
         const std::string name = r.get_string("body name");
         const auto n = r.get<std::int64_t>("body table"), n_tets = r.get<std::int64_t>("body table"),
                    parts = r.get<std::int64_t>("body table");
+        CORO_CHECK(n >= 0 && n_tets >= 0 && n <= INT32_MAX && n_tets <= INT32_MAX, InputError,
+                   where << ": corrupt checkpoint: body '" << name << "' has " << n << " nodes and " << n_tets
+                         << " tets");
+        state_sizes[k] = static_cast<std::size_t>(6 * n + 9 * n_tets) * sizeof(double);
+        if (local[k] < 0)
+            continue;
+        const Body& body = scene.bodies[at(local[k])];
         CORO_CHECK(name == body.name() && n == body.num_vertices() && n_tets == body.mesh().num_tets(), InputError,
                    where << ": checkpoint body '" << name << "' (" << n << " nodes, " << n_tets
                          << " tets) does not match the case's body '" << body.name() << "' ("
@@ -244,7 +286,12 @@ CheckpointState read_checkpoint(const fs::path& path, Scene& scene, std::uint64_
         frame.step = static_cast<Index>(r.get<std::int64_t>("frames"));
         frame.time = r.get<double>("frames");
     }
-    for (Body& body : scene.bodies) {
+    for (std::size_t k = 0; k < n_bodies; ++k) {
+        if (local[k] < 0) {
+            r.skip(state_sizes[k], "body state");
+            continue;
+        }
+        Body& body = scene.bodies[at(local[k])];
         const Index n = body.num_vertices(), n_tets = body.mesh().num_tets();
         for (VecX* values : {&body.positions(), &body.velocities()}) {
             const std::vector<double> nodes = r.get_doubles(at(3 * n), "body state");

@@ -16,65 +16,52 @@ std::size_t at(Index i) { return static_cast<std::size_t>(i); }
 Index vertex_shares(const ContactSurface& surface) { return surface.embed_nodes.empty() ? 1 : 4; }
 } // namespace
 
-void ContactResponse::compute(const std::vector<Body>& bodies, const std::vector<ContactSurface>& surfaces,
-                              const std::vector<ContactPoint>& contacts, const ContactSettings& settings, double dt,
-                              SceneMatrix& matrix)
+void evaluate_contacts(const std::vector<ContactSurface>& surfaces, const std::vector<ContactPoint>& contacts,
+                       const ContactNodes& nodes, const ContactSettings& settings, double dt,
+                       ContactRecords& records)
 {
-    const auto n_bodies = static_cast<Index>(bodies.size());
-    const auto carries_nodes = [&](Index surface) { return surface >= 0 && surface < n_bodies; };
-    m_forces.resize(bodies.size());
-    for (std::size_t b = 0; b < bodies.size(); ++b)
-        m_forces[b].setZero(3 * bodies[b].num_vertices());
-
     // Who carries the two points of each contact: the penetrating vertex (−1) and the other
     // face's vertices (barycentric weights). Obstacles (surfaces after the bodies, or planes)
     // carry no nodes.
-    m_share_offsets.resize(contacts.size() + 1);
-    m_share_offsets[0] = 0;
+    records.terms.resize(contacts.size());
+    records.share_offsets.resize(contacts.size() + 1);
+    records.share_offsets[0] = 0;
     for (std::size_t i = 0; i < contacts.size(); ++i) {
         const ContactPoint& contact = contacts[i];
         Index count = 0;
-        if (carries_nodes(contact.body))
+        if (nodes.carries_nodes(contact.body))
             count += vertex_shares(surfaces[at(contact.body)]);
-        if (contact.other.is_surface() && carries_nodes(contact.other.index) && contact.face >= 0)
+        if (contact.other.is_surface() && nodes.carries_nodes(contact.other.index) && contact.face >= 0)
             count += 3 * vertex_shares(surfaces[at(contact.other.index)]);
-        m_share_offsets[i + 1] = m_share_offsets[i] + count;
+        records.share_offsets[i + 1] = records.share_offsets[i] + count;
     }
-    m_shares.resize(at(m_share_offsets.back()));
-    m_share_forces.resize(m_shares.size());
-    // Blocks: every pair of shares of a contact, contact after contact.
-    m_block_offsets.resize(contacts.size() + 1);
-    m_block_offsets[0] = 0;
-    for (std::size_t i = 0; i < contacts.size(); ++i) {
-        const Index count = m_share_offsets[i + 1] - m_share_offsets[i];
-        m_block_offsets[i + 1] = m_block_offsets[i] + count * count;
-    }
-    CouplingBlocks& coupling = matrix.coupling();
-    coupling.reset(m_block_offsets.back());
+    records.shares.resize(at(records.share_offsets.back()));
 
     const double k = settings.stiffness;
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, contacts.size(), CONTACT_GRAIN),
                       [&](const tbb::blocked_range<std::size_t>& range) {
         for (std::size_t i = range.begin(); i != range.end(); ++i) {
             const ContactPoint& contact = contacts[i];
-            Share* shares = m_shares.data() + m_share_offsets[i];
-            const Index count = m_share_offsets[i + 1] - m_share_offsets[i];
+            ContactShare* shares = records.shares.data() + records.share_offsets[i];
+            const Index count = records.share_offsets[i + 1] - records.share_offsets[i];
             Index filled = 0;
-            Index block = m_block_offsets[i];
+            const auto add_node = [&](Index surface, Index node, double coefficient) {
+                shares[filled++] = {surface, node, coefficient, nodes.fixed(surface, node)};
+            };
             const auto add_vertex = [&](Index body, Index vertex, double coefficient) {
                 const ContactSurface& surface = surfaces[at(body)];
                 const auto v = at(vertex);
                 if (surface.embed_nodes.empty()) {
-                    shares[filled++] = {body, surface.body_node[v], coefficient};
+                    add_node(body, surface.body_node[v], coefficient);
                     return;
                 }
                 for (std::size_t a = 0; a < 4; ++a)
-                    shares[filled++] = {body, surface.embed_nodes[v][a],
-                                        coefficient * surface.embed_weights[v][static_cast<Eigen::Index>(a)]};
+                    add_node(body, surface.embed_nodes[v][a],
+                             coefficient * surface.embed_weights[v][static_cast<Eigen::Index>(a)]);
             };
-            if (carries_nodes(contact.body))
+            if (nodes.carries_nodes(contact.body))
                 add_vertex(contact.body, contact.vertex, -1.0);
-            if (contact.other.is_surface() && carries_nodes(contact.other.index) && contact.face >= 0) {
+            if (contact.other.is_surface() && nodes.carries_nodes(contact.other.index) && contact.face >= 0) {
                 const ContactSurface& other = surfaces[at(contact.other.index)];
                 for (int c = 0; c < 3; ++c)
                     add_vertex(contact.other.index, other.faces(contact.face, c), contact.barycentric[c]);
@@ -84,10 +71,11 @@ void ContactResponse::compute(const std::vector<Body>& bodies, const std::vector
             const Vec3& n = contact.normal;
             Vec3 u = Vec3::Zero(); // velocity of the other side relative to the penetrating vertex
             for (Index s = 0; s < count; ++s)
-                u += shares[s].coefficient * bodies[at(shares[s].body)].velocities().segment<3>(3 * shares[s].node);
+                u += shares[s].coefficient * nodes.velocity(shares[s].surface, shares[s].node);
             const double normal_force = k * contact.depth;
-            const Vec3 force = normal_force * n; // on the penetrating side
-            Mat3 stiffness = (dt * dt * k + dt * settings.damping) * n * n.transpose();
+            ContactTerms& terms = records.terms[i];
+            terms.force = normal_force * n; // on the penetrating side
+            terms.stiffness = (dt * dt * k + dt * settings.damping) * n * n.transpose();
             if (settings.friction > 0.0) {
                 // Implicit, lagged friction: F_t = η u_t⁺ with η = μ f_n / max(|u_t|, ε) taken at
                 // the step start. A slipping contact keeps |F_t| ≈ μ f_n, a stuck one is held by a
@@ -95,32 +83,76 @@ void ContactResponse::compute(const std::vector<Body>& bodies, const std::vector
                 // explicit μ f_n on a light vertex can, and then chatters).
                 const Mat3 tangential = Mat3::Identity() - n * n.transpose();
                 const double speed = (tangential * u).norm();
-                stiffness += dt * settings.friction * normal_force / std::max(speed, FRICTION_STICK_SPEED) * tangential;
+                terms.stiffness +=
+                    dt * settings.friction * normal_force / std::max(speed, FRICTION_STICK_SPEED) * tangential;
             }
-            const auto fixed = [&](const Share& share) {
-                return bodies[at(share.body)].fixed()[at(share.node)] != 0;
-            };
-            for (Index r = 0; r < count; ++r) {
-                const Share& row = shares[r];
-                m_share_forces[at(m_share_offsets[i] + r)] = -row.coefficient * force;
-                for (Index c = 0; c < count; ++c) {
-                    const Share& col = shares[c];
+        }
+    });
+}
+
+void ContactResponse::compute(const std::vector<Body>& bodies, const std::vector<ContactSurface>& surfaces,
+                              const std::vector<ContactPoint>& contacts, const ContactSettings& settings, double dt,
+                              SceneMatrix& matrix)
+{
+    evaluate_contacts(surfaces, contacts, BodyNodes(bodies), settings, dt, m_records);
+    apply(
+        m_records, bodies, [](Index surface) { return surface; },
+        [&](Index surface, Index node) { return matrix.offset(surface) + node; }, nullptr, matrix);
+}
+
+void ContactResponse::apply(const ContactRecords& records, const std::vector<Body>& bodies,
+                            FunctionRef<Index(Index surface)> local_body,
+                            FunctionRef<Index(Index surface, Index node)> column,
+                            const std::vector<Index>* column_order, SceneMatrix& matrix)
+{
+    m_forces.resize(bodies.size());
+    for (std::size_t b = 0; b < bodies.size(); ++b)
+        m_forces[b].setZero(3 * bodies[b].num_vertices());
+
+    // Blocks: every pair of shares of a contact whose row is here, contact after contact.
+    const Index n_contacts = records.size();
+    m_block_offsets.resize(at(n_contacts) + 1);
+    m_block_offsets[0] = 0;
+    for (Index i = 0; i < n_contacts; ++i) {
+        const Index first = records.share_offsets[at(i)], end = records.share_offsets[at(i) + 1];
+        Index rows = 0;
+        for (Index s = first; s < end; ++s)
+            rows += local_body(records.shares[at(s)].surface) >= 0 ? 1 : 0;
+        m_block_offsets[at(i) + 1] = m_block_offsets[at(i)] + rows * (end - first);
+    }
+    CouplingBlocks& coupling = matrix.coupling();
+    coupling.reset(m_block_offsets.back());
+    m_share_forces.resize(records.shares.size());
+    tbb::parallel_for(tbb::blocked_range<Index>(0, n_contacts, CONTACT_GRAIN), [&](const tbb::blocked_range<Index>& range) {
+        for (Index i = range.begin(); i != range.end(); ++i) {
+            const ContactTerms& terms = records.terms[at(i)];
+            const Index first = records.share_offsets[at(i)], end = records.share_offsets[at(i) + 1];
+            Index block = m_block_offsets[at(i)];
+            for (Index r = first; r < end; ++r) {
+                const ContactShare& row = records.shares[at(r)];
+                const Index body = local_body(row.surface);
+                if (body < 0)
+                    continue;
+                m_share_forces[at(r)] = terms.force_on(row);
+                const Index scene_row = matrix.offset(body) + row.node;
+                for (Index c = first; c < end; ++c) {
+                    const ContactShare& col = records.shares[at(c)];
                     CouplingBlocks::Entry& entry = coupling.entry(block++);
-                    entry.row = matrix.offset(row.body) + row.node;
-                    entry.column = matrix.offset(col.body) + col.node;
-                    // Terms in a row or column of a fixed node are left out: those are identity.
-                    if (fixed(row) || fixed(col))
-                        entry.value.setZero();
-                    else
-                        entry.value = row.coefficient * col.coefficient * stiffness;
+                    entry.row = scene_row;
+                    entry.column = column(col.surface, col.node);
+                    entry.value = terms.block(row, col);
                 }
             }
         }
     });
     // Forces in contact order, whatever the schedule.
-    for (std::size_t s = 0; s < m_shares.size(); ++s)
-        m_forces[at(m_shares[s].body)].segment<3>(3 * m_shares[s].node) += m_share_forces[s];
-    coupling.finish(matrix.chunks());
+    for (std::size_t s = 0; s < records.shares.size(); ++s) {
+        const ContactShare& share = records.shares[s];
+        const Index body = local_body(share.surface);
+        if (body >= 0)
+            m_forces[at(body)].segment<3>(3 * share.node) += m_share_forces[s];
+    }
+    coupling.finish(matrix.chunks(), column_order);
 }
 
 } // namespace coro

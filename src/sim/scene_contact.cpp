@@ -72,7 +72,20 @@ void contact_components(const std::vector<ContactSurface>& surfaces, Index num_b
     boxes.clear();
     for (Index b = 0; b < num_bodies; ++b)
         boxes.push_back(surfaces[static_cast<std::size_t>(b)].tree.bounds());
-    overlapping_pairs(boxes, scratch.pairs, scratch.sweep_order);
+    contact_components_of_boxes(boxes, scratch, component_of_body);
+}
+
+void contact_components(const std::vector<Aabb>& body_boxes, std::vector<Index>& component_of_body)
+{
+    ComponentScratch scratch;
+    contact_components_of_boxes(body_boxes, scratch, component_of_body);
+}
+
+void contact_components_of_boxes(const std::vector<Aabb>& body_boxes, ComponentScratch& scratch,
+                                 std::vector<Index>& component_of_body)
+{
+    const auto num_bodies = static_cast<Index>(body_boxes.size());
+    overlapping_pairs(body_boxes, scratch.pairs, scratch.sweep_order);
     // Union-find with the lower body as root, so a component's root is its first body.
     std::vector<Index>& root = component_of_body;
     root.resize(static_cast<std::size_t>(num_bodies));

@@ -128,9 +128,9 @@ void SceneSystem::report_non_finite(const VecX& values, const char* what) const
     }
 }
 
-PcgResult SceneSystem::solve(const PcgSettings& settings)
+PcgResult SceneSystem::solve(const PcgSettings& settings, SceneExchange* exchange)
 {
-    return m_pcg.solve(m_matrix, m_rhs, m_velocity, settings);
+    return m_pcg.solve(m_matrix, m_rhs, m_velocity, settings, exchange);
 }
 
 void SceneSystem::advance(double dt)

@@ -1,9 +1,12 @@
 #include <corocontact/sim/simulation.hpp>
 
 #include <corocontact/config.hpp>
+#include <corocontact/core/collective.hpp>
 #include <corocontact/core/error.hpp>
 #include <corocontact/sim/divergence_check.hpp>
+#include <corocontact/sim/rank_contact.hpp>
 #include <corocontact/sim/run_notes.hpp>
+#include <corocontact/solver/rank_exchange.hpp>
 #include <corocontact/sim/scene_contact.hpp>
 #include <corocontact/sim/static_solver.hpp>
 
@@ -13,6 +16,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <optional>
 #include <tuple>
 #include <string>
 
@@ -52,6 +56,35 @@ struct Simulation::EmbreeCheck {
 struct Simulation::EmbreeCheck {};
 #endif
 
+struct Simulation::Ranks {
+    Communicator& communicator;
+    RankExchange exchange;
+    std::optional<RankContact> contact; // with contact enabled
+    std::uint64_t step_bytes = 0;  // received during the steps of this run
+    std::uint64_t solve_bytes = 0; // of those, during the solves
+    std::size_t case_bodies = 0;   // bodies of all processes
+    Index steps = 0;              // steps of this run
+    Index cross_rank = 0;         // contacts detected here that touch another process, summed
+
+    Ranks(const SceneDistribution& distribution, const Scene& scene, SceneMatrix& matrix, bool with_contact)
+        : communicator(*distribution.communicator),
+          exchange(communicator, chunk_bodies(distribution, matrix), matrix.num_block_rows()),
+          case_bodies(distribution.ownership.owner.size())
+    {
+        // Until a detection joins them, every case body is a component of its own.
+        matrix.set_components(distribution.body_ids, exchange.num_components());
+        if (with_contact)
+            contact.emplace(communicator, distribution.ownership, distribution.body_ids, scene);
+    }
+    static std::vector<Index> chunk_bodies(const SceneDistribution& distribution, const SceneMatrix& matrix)
+    {
+        std::vector<Index> bodies;
+        for (Index c = 0; c < matrix.chunks().num_chunks(); ++c)
+            bodies.push_back(distribution.body_ids[static_cast<std::size_t>(matrix.chunk_body(c))]);
+        return bodies;
+    }
+};
+
 namespace {
 // Seconds since `start`.
 double seconds_since(std::chrono::steady_clock::time_point start)
@@ -77,12 +110,19 @@ void add_solve(const PcgResult& result, RunSummary& summary)
 }
 } // namespace
 
-Simulation::Simulation(Scene& scene, const CaseSpec& spec)
+Simulation::Simulation(Scene& scene, const CaseSpec& spec, const SceneDistribution* distribution)
     : m_scene(scene), m_spec(spec), m_system(scene.bodies), m_divergence(scene.bodies)
 {
+    const bool distributed = distribution != nullptr && distribution->communicator != nullptr;
+    CORO_CHECK(!distributed || !contact_applies(spec) || spec.contact.cross_check != CrossCheck::EMBREE, InputError,
+               spec.file.string() << ": contact.cross_check = \"embree\" runs in one process only (expected "
+                                     "\"none\" under mpirun with several processes)");
+    if (contact_applies(spec))
+        m_scene.surfaces = make_scene_surfaces(m_scene);
+    if (distributed)
+        m_ranks = std::make_unique<Ranks>(*distribution, m_scene, m_system.matrix(), contact_applies(spec));
     if (!contact_applies(spec))
         return;
-    m_scene.surfaces = make_scene_surfaces(m_scene);
     if (spec.contact.cross_check == CrossCheck::EMBREE) {
 #if CORO_WITH_EMBREE
         m_embree = std::make_unique<EmbreeCheck>(m_scene.surfaces);
@@ -95,11 +135,25 @@ Simulation::Simulation(Scene& scene, const CaseSpec& spec)
 
 Simulation::~Simulation() = default;
 
+void Simulation::collectively(FunctionRef<void()> work)
+{
+    run_collectively(m_ranks ? &m_ranks->communicator : nullptr, work);
+}
+
 void Simulation::detect(RunSummary& summary)
 {
     if (!contact_applies(m_spec))
         return;
     ScopedTimer timer(summary.phases.contact);
+    if (m_ranks) {
+        const RankContact::Counts counts = m_ranks->contact->detect(
+            m_scene, m_spec.contact, m_spec.simulation.dt, m_response, m_system.matrix(), m_ranks->exchange);
+        ++summary.detections;
+        summary.contacts_mean += static_cast<double>(counts.contacts);
+        summary.max_contact_depth = std::max(summary.max_contact_depth, counts.max_depth);
+        m_ranks->cross_rank += counts.cross_rank;
+        return;
+    }
     update_contact_surfaces(m_scene.bodies, m_scene.surfaces);
     // Into buffers kept from step to step: a step allocates nothing once they have grown.
     const auto num_bodies = static_cast<Index>(m_scene.bodies.size());
@@ -148,19 +202,22 @@ void Simulation::dynamic_step()
     static const std::vector<VecX> no_forces;
     const double dt = m_spec.simulation.dt;
     PhaseTimes& phases = m_totals.phases;
-    {
-        ScopedTimer timer(phases.rotation);
-        m_system.element_loop(dt);
-    }
-    {
+    collectively([&] {
+        {
+            ScopedTimer timer(phases.rotation);
+            m_system.element_loop(dt);
+        }
         ScopedTimer timer(phases.assembly);
         m_system.assemble(dt, m_spec.simulation.gravity, m_spec.contact.enabled ? m_response.forces() : no_forces);
-    }
+    });
     ScopedTimer timer(phases.solve);
     const PreconditionerTimes before = m_system.preconditioner_times();
-    add_solve(m_system.solve(pcg_settings(m_spec.solver)), m_totals);
+    const std::uint64_t bytes = m_ranks ? m_ranks->communicator.bytes_received() : 0;
+    add_solve(m_system.solve(pcg_settings(m_spec.solver), m_ranks ? &m_ranks->exchange : nullptr), m_totals);
+    if (m_ranks)
+        m_ranks->solve_bytes += m_ranks->communicator.bytes_received() - bytes;
     add_difference(before, m_system.preconditioner_times(), m_totals.preconditioner);
-    m_system.advance(dt);
+    collectively([&] { m_system.advance(dt); });
 }
 
 void Simulation::static_step(Index load_step)
@@ -204,6 +261,14 @@ void Simulation::start(Index resume_step, const RunSummary& resume)
     if (resume_step > 0) {
         // The contact response of the saved state; its counters were taken when it was saved.
         m_totals = resume;
+        if (m_ranks && m_ranks->communicator.rank() != 0) {
+            // Counters summed over the processes (totals()) continue from rank 0's.
+            m_totals.contacts_mean = 0.0;
+            if (m_spec.simulation.analysis == Analysis::STATIC) {
+                m_totals.cg_iterations_mean = m_totals.cg_residual_mean = m_totals.static_iterations_mean = 0.0;
+                m_totals.solves = m_totals.solves_not_converged = m_totals.static_not_converged = 0;
+            }
+        }
         RunSummary scratch;
         detect(scratch);
     } else {
@@ -218,13 +283,14 @@ void Simulation::start(Index resume_step, const RunSummary& resume)
 void Simulation::step()
 {
     const auto start = std::chrono::steady_clock::now();
+    const std::uint64_t bytes = m_ranks ? m_ranks->communicator.bytes_received() : 0;
     const Index step = m_step + 1;
     try {
         if (m_spec.simulation.analysis == Analysis::STATIC)
-            static_step(step);
+            collectively([&] { static_step(step); });
         else
             dynamic_step();
-        m_divergence.check(m_scene.bodies);
+        collectively([&] { m_divergence.check(m_scene.bodies); });
         detect(m_totals);
     } catch (const NumericalError& error) {
         // Solvers name what failed; add where the first NaN/Inf is, in mesh file numbering.
@@ -235,11 +301,73 @@ void Simulation::step()
     m_step = step;
     m_totals.steps = step;
     m_totals.wall_s += seconds_since(start);
+    if (m_ranks) {
+        m_ranks->step_bytes += m_ranks->communicator.bytes_received() - bytes;
+        ++m_ranks->steps;
+    }
+}
+
+namespace {
+// Σ over the processes of one value each, added in rank order.
+double sum_over_ranks(Communicator& communicator, double value)
+{
+    std::vector<double> all(static_cast<std::size_t>(communicator.size()));
+    std::vector<int> counts(all.size(), 1), offsets(all.size());
+    for (std::size_t r = 0; r < offsets.size(); ++r)
+        offsets[r] = static_cast<int>(r);
+    communicator.all_gather(&value, 1, all.data(), counts.data(), offsets.data());
+    double sum = 0.0;
+    for (const double v : all)
+        sum += v;
+    return sum;
+}
+} // namespace
+
+RunSummary Simulation::totals() const
+{
+    RunSummary totals = m_totals;
+    if (!m_ranks)
+        return totals;
+    // Contacts are counted where they are detected; static load steps solve each process's
+    // bodies; everything else is the same on every process (a dynamic step's one solve).
+    Communicator& communicator = m_ranks->communicator;
+    totals.contacts_mean = sum_over_ranks(communicator, totals.contacts_mean);
+    communicator.all_reduce(&totals.max_contact_depth, 1, Reduction::MAX);
+    if (m_spec.simulation.analysis == Analysis::STATIC) {
+        totals.cg_iterations_mean = sum_over_ranks(communicator, totals.cg_iterations_mean);
+        totals.cg_residual_mean = sum_over_ranks(communicator, totals.cg_residual_mean);
+        totals.static_iterations_mean = sum_over_ranks(communicator, totals.static_iterations_mean);
+        std::int64_t counts[] = {totals.solves, totals.solves_not_converged, totals.static_not_converged};
+        communicator.all_reduce(counts, 3, Reduction::SUM);
+        totals.solves = static_cast<Index>(counts[0]);
+        totals.solves_not_converged = static_cast<Index>(counts[1]);
+        totals.static_not_converged = static_cast<Index>(counts[2]);
+        std::int64_t most = totals.static_iterations_max;
+        communicator.all_reduce(&most, 1, Reduction::MAX);
+        totals.static_iterations_max = static_cast<Index>(most);
+    }
+    return totals;
+}
+
+RankStats Simulation::rank_stats() const
+{
+    RankStats stats;
+    if (!m_ranks)
+        return stats;
+    stats.ranks = m_ranks->communicator.size();
+    const double steps = static_cast<double>(std::max<Index>(m_ranks->steps, 1));
+    stats.mpi_bytes_per_step = static_cast<double>(m_ranks->step_bytes) / steps;
+    stats.solve_bytes_per_step = static_cast<double>(m_ranks->solve_bytes) / steps;
+    std::int64_t cross_rank = m_ranks->cross_rank;
+    m_ranks->communicator.all_reduce(&cross_rank, 1, Reduction::SUM);
+    stats.cross_rank_contacts_mean =
+        m_totals.detections > 0 ? static_cast<double>(cross_rank) / static_cast<double>(m_totals.detections) : 0.0;
+    return stats;
 }
 
 RunSummary Simulation::summary() const
 {
-    RunSummary summary = m_totals;
+    RunSummary summary = totals();
     summary.steps_per_s = summary.wall_s > 0.0 ? summary.steps / summary.wall_s : 0.0;
     if (summary.solves > 0) {
         summary.cg_iterations_mean /= summary.solves;
@@ -247,8 +375,9 @@ RunSummary Simulation::summary() const
     }
     if (summary.detections > 0)
         summary.contacts_mean /= summary.detections;
+    const std::size_t bodies = m_ranks ? m_ranks->case_bodies : m_scene.bodies.size();
     if (m_spec.simulation.analysis == Analysis::STATIC && summary.steps > 0)
-        summary.static_iterations_mean /= static_cast<double>(summary.steps) * static_cast<double>(m_scene.bodies.size());
+        summary.static_iterations_mean /= static_cast<double>(summary.steps) * static_cast<double>(bodies);
     return summary;
 }
 
@@ -277,19 +406,23 @@ RunSummary Simulation::run(Index steps, const FrameCallback& on_frame, const Pro
         if (control.checkpoint_every <= 0 || !control.on_checkpoint)
             return;
         double unused = 0.0;
-        timed(unused, [&] { control.on_checkpoint(step, m_totals); });
+        timed(unused, [&] { control.on_checkpoint(step, totals()); });
     };
-    const auto stop_requested = [&] { return control.stop != nullptr && control.stop->load() != 0; };
+    // Distributed: a signal may reach the processes in different steps; all stop at the first.
+    const auto stop_signal = [&] {
+        std::int64_t signal = control.stop != nullptr ? control.stop->load() : 0;
+        if (m_ranks)
+            m_ranks->communicator.all_reduce(&signal, 1, Reduction::MAX);
+        return static_cast<int>(signal);
+    };
 
     start(first, control.resume_summary);
     if (first == 0)
         write_frame(0);
-    if (stop_requested())
-        m_totals.stop_signal = control.stop->load();
+    m_totals.stop_signal = stop_signal();
     while (m_totals.stop_signal == 0 && m_step < total) {
         step();
-        if (stop_requested())
-            m_totals.stop_signal = control.stop->load();
+        m_totals.stop_signal = stop_signal();
         const bool frame_due = m_step % every == 0 || m_step == total;
         if (frame_due || m_totals.stop_signal != 0)
             write_frame(m_step);

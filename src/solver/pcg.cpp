@@ -33,6 +33,10 @@ PreconditionerTimes PcgSolver::preconditioner_times() const
 void PcgSolver::sum_by_component(const SceneMatrix& a, const std::vector<double>& partials, int width, bool all)
 {
     m_totals.assign(m_components.size() * static_cast<std::size_t>(width), 0.0);
+    if (m_exchange) {
+        m_exchange->sum_by_component(partials.data(), width, m_totals.data());
+        return;
+    }
     for (Index c = 0; c < a.chunks().num_chunks(); ++c) {
         const auto k = at(a.chunk_component(c));
         if (!all && !m_components[k].active)
@@ -47,6 +51,13 @@ void PcgSolver::mark_active_chunks(const SceneMatrix& a)
 {
     for (Index c = 0; c < a.chunks().num_chunks(); ++c)
         m_chunk_active[at(c)] = m_components[at(a.chunk_component(c))].active ? 1 : 0;
+}
+
+void PcgSolver::multiply(const SceneMatrix& a, double* x, double* y, double* chunk_dots)
+{
+    if (m_exchange)
+        m_exchange->update_ghosts(x);
+    a.multiply(x, y, chunk_dots, m_chunk_active.data());
 }
 
 void PcgSolver::residual_pass(const SceneMatrix& a, const double* b, double* x)
@@ -116,7 +127,8 @@ PcgResult PcgSolver::solve(const BsrMatrix& a, CRef<VecX> b, Eigen::Ref<VecX> x,
     return solve(SceneMatrix({&a}), b, x, settings);
 }
 
-PcgResult PcgSolver::solve(const SceneMatrix& a, CRef<VecX> b, Eigen::Ref<VecX> x, const PcgSettings& settings)
+PcgResult PcgSolver::solve(const SceneMatrix& a, CRef<VecX> b, Eigen::Ref<VecX> x, const PcgSettings& settings,
+                           SceneExchange* exchange)
 {
     const Index n = a.num_dofs();
     CORO_ASSERT(b.size() == n && x.size() == n);
@@ -124,7 +136,8 @@ PcgResult PcgSolver::solve(const SceneMatrix& a, CRef<VecX> b, Eigen::Ref<VecX> 
     const RowChunks& chunks = a.chunks();
     m_r.resize(n);
     m_z.resize(n);
-    m_p.resize(n);
+    m_exchange = exchange;
+    m_p.resize(n + (exchange ? 3 * exchange->num_ghost_rows() : 0));
     m_q.resize(n);
     m_partials.resize(2 * at(chunks.num_chunks()));
     m_chunk_active.assign(at(chunks.num_chunks()), 1);
@@ -159,7 +172,8 @@ PcgResult PcgSolver::solve(const SceneMatrix& a, CRef<VecX> b, Eigen::Ref<VecX> 
 
     // r = b − A x, z = M⁻¹ r, p = z.
     mark_active_chunks(a);
-    a.multiply(x.data(), m_r.data(), nullptr, m_chunk_active.data());
+    m_p.head(n) = x; // x has no ghost rows: multiply a copy that has
+    multiply(a, m_p.data(), m_r.data(), nullptr);
     residual_pass(a, b.data(), x.data());
     sum_by_component(a, m_partials, 2, false);
     for (std::size_t k = 0; k < m_components.size(); ++k) {
@@ -174,13 +188,13 @@ PcgResult PcgSolver::solve(const SceneMatrix& a, CRef<VecX> b, Eigen::Ref<VecX> 
         component.rz = rz;
         component.active = component.r_norm > stop * component.b_norm && settings.max_iterations > 0;
     }
-    m_p = m_z;
+    m_p.head(n) = m_z;
 
     for (;;) {
         mark_active_chunks(a);
         if (std::none_of(m_components.begin(), m_components.end(), [](const Component& c) { return c.active; }))
             break;
-        a.multiply(m_p.data(), m_q.data(), m_partials.data(), m_chunk_active.data());
+        multiply(a, m_p.data(), m_q.data(), m_partials.data());
         sum_by_component(a, m_partials, 1, false);
         for (std::size_t k = 0; k < m_components.size(); ++k) {
             Component& component = m_components[k];

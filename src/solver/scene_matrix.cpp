@@ -59,7 +59,19 @@ void SceneMatrix::set_components(const std::vector<Index>& component_of_body)
                                         "of their first body");
         count += k == count ? 1 : 0;
     }
-    m_num_components = count;
+    set_components(component_of_body, count);
+}
+
+void SceneMatrix::set_components(const std::vector<Index>& component_of_body, Index num_components)
+{
+    if (static_cast<Index>(component_of_body.size()) != num_bodies())
+        throw std::invalid_argument("SceneMatrix::set_components: " + std::to_string(component_of_body.size()) +
+                                    " components for " + std::to_string(num_bodies()) + " bodies");
+    for (const Index k : component_of_body)
+        if (k < 0 || k >= num_components)
+            throw std::invalid_argument("SceneMatrix::set_components: component " + std::to_string(k) +
+                                        " not in [0, " + std::to_string(num_components) + ")");
+    m_num_components = num_components;
     for (std::size_t c = 0; c < m_chunk_component.size(); ++c)
         m_chunk_component[c] = component_of_body[at(m_chunk_body[c])];
 }

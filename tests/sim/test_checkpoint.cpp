@@ -8,8 +8,10 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <string>
 
 using namespace coro;
@@ -189,4 +191,36 @@ TEST(Checkpoint, RejectsTruncatedForeignAndOtherCaseFiles)
     Loaded other = load(other_file);
     EXPECT_THAT([&] { read_checkpoint(dir / "good.checkpoint", other.scene(), fingerprint, warnings); },
                 ThrowsMessage<InputError>(HasSubstr("holds 2 bodies, the case has 1")));
+}
+
+TEST(Checkpoint, OneProcessOfADistributedRunRestoresOnlyItsBodies)
+{
+    // The file of the whole case, written from its bodies' parts as rank 0 gathers them, is the
+    // one-process file; a process holding only "right" restores just that body from it.
+    const fs::path dir = test::scratch_dir("checkpoint_parts");
+    const fs::path case_file = test::write_text(dir / "spheres.toml", CASE);
+    Loaded first = load(case_file);
+    Simulation simulation(first.scene(), first.spec);
+    simulation.run(6, nullptr, nullptr);
+    const std::uint64_t fingerprint = case_fingerprint(first.spec);
+    write_checkpoint(dir / "whole.checkpoint", first.scene(), {6, simulation.summary(), {}}, fingerprint);
+    std::vector<CheckpointBody> parts;
+    for (const Body& body : first.scene().bodies)
+        parts.push_back(checkpoint_body(body));
+    write_checkpoint(dir / "parts.checkpoint", parts, {6, simulation.summary(), {}}, fingerprint);
+    std::ifstream whole(dir / "whole.checkpoint", std::ios::binary), from_parts(dir / "parts.checkpoint", std::ios::binary);
+    EXPECT_TRUE(std::equal(std::istreambuf_iterator<char>(whole), {}, std::istreambuf_iterator<char>(from_parts), {}));
+
+    Loaded second = load(case_file);
+    second.scene().bodies.erase(second.scene().bodies.begin()); // this process holds body 1 only
+    std::vector<std::string> warnings;
+    const CheckpointState state =
+        read_checkpoint(dir / "parts.checkpoint", second.scene(), {1}, 2, fingerprint, warnings);
+    EXPECT_EQ(state.step, 6);
+    ASSERT_EQ(second.scene().bodies.size(), 1u);
+    EXPECT_EQ(second.scene().bodies[0].positions(), first.scene().bodies[1].positions());
+    EXPECT_EQ(second.scene().bodies[0].velocities(), first.scene().bodies[1].velocities());
+    EXPECT_EQ(second.scene().bodies[0].fem().rotations(), first.scene().bodies[1].fem().rotations());
+    EXPECT_THAT([&] { read_checkpoint(dir / "parts.checkpoint", second.scene(), {1}, 3, fingerprint, warnings); },
+                ThrowsMessage<InputError>(HasSubstr("holds 2 bodies, the case has 3")));
 }

@@ -10,6 +10,7 @@
 #include <functional>
 #include <memory>
 #include <tuple>
+#include <utility>
 #include <vector>
 
 namespace coro {
@@ -115,6 +116,15 @@ void detect_contacts(const std::vector<ContactSurface>& surfaces, const Detectio
 
 /// The same, returned.
 std::vector<ContactPoint> detect_contacts(const std::vector<ContactSurface>& surfaces,
+                                          const DetectionSettings& settings, DetectionScratch& scratch,
+                                          DetectionStats* stats = nullptr);
+
+/// detect_contacts() of the given surface pairs only, both directions of each: the caller ran
+/// the broad phase (one process of a distributed run detects the pairs it owns). The contacts
+/// of a pair do not depend on the other pairs or surfaces.
+/// @param[in] pairs  (a, b) with a < b, sorted ascending, no repeats
+std::vector<ContactPoint> detect_contacts(const std::vector<ContactSurface>& surfaces,
+                                          const std::vector<std::pair<Index, Index>>& pairs,
                                           const DetectionSettings& settings, DetectionScratch& scratch,
                                           DetectionStats* stats = nullptr);
 

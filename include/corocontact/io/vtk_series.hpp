@@ -2,6 +2,7 @@
 /// @file vtk_series.hpp
 /// @brief A time series for ParaView: NAME.pvd listing NAME_<step>.vtm, one .vtu per block.
 
+#include <corocontact/core/function_ref.hpp>
 #include <corocontact/core/types.hpp>
 
 #include <Eigen/Core>
@@ -50,6 +51,21 @@ public:
     ///         still lists the earlier frames
     void write_frame(Index step, double time, const std::vector<FrameBlock>& blocks);
 
+    /// One process's share of a frame that several write (a distributed run): the blocks it
+    /// holds, each under the file name of its place among `names` (what write_frame() gives
+    /// the same block). The frame is listed by list_frame() once every share is written.
+    /// @param[in] names   every block of the frame, in frame order: the same on every process
+    /// @param[in] blocks  this process's blocks, each named in `names`
+    /// @return the files written, for their writer to remove if another share fails
+    /// @throws OutputError if a file cannot be written (the files written before are removed)
+    std::vector<std::filesystem::path> write_blocks(Index step, const std::vector<std::string>& names,
+                                                    const std::vector<FrameBlock>& blocks) const;
+
+    /// Writes the .vtm of a frame whose blocks (`names`, in frame order) are written, and
+    /// appends the frame to the .pvd: write_frame() is write_blocks() of every block and this.
+    /// @throws OutputError if a file cannot be written (a new frame's .vtm is removed again)
+    void list_frame(Index step, double time, const std::vector<std::string>& names);
+
     /// Lists a frame that an earlier run wrote into the same directory (a restart continues
     /// its series) without writing anything: the next .pvd lists it before the new frames.
     /// @param[in] step  step number of the frame on disk
@@ -72,9 +88,17 @@ private:
         double time;
         std::string vtm; // relative to m_dir
     };
-    /// Writes the blocks and the .vtm of one frame; appends each finished file to `written`.
-    void write_frame_files(const std::string& stem, const std::vector<FrameBlock>& blocks,
-                           std::vector<std::filesystem::path>& written) const;
+    /// Writes `blocks` of the frame whose blocks are `names`; appends each finished file to
+    /// `written`.
+    void write_block_files(const std::string& stem, const std::vector<std::string>& names,
+                           const std::vector<FrameBlock>& blocks, std::vector<std::filesystem::path>& written) const;
+    /// Writes the .vtm naming `names`; appends it to `written`.
+    void write_vtm(const std::string& stem, const std::vector<std::string>& names,
+                   std::vector<std::filesystem::path>& written) const;
+    /// write_blocks(written) (the frame's .vtu files), then its .vtm and the .pvd; a new
+    /// frame's files are all removed again if one cannot be written.
+    void list_written_frame(Index step, double time, const std::vector<std::string>& names,
+                            FunctionRef<void(std::vector<std::filesystem::path>& written)> write_blocks);
 
     std::filesystem::path m_dir;
     std::string m_name;

@@ -51,6 +51,18 @@ std::uint64_t case_fingerprint(const CaseSpec& spec);
 void write_checkpoint(const std::filesystem::path& path, const Scene& scene, const CheckpointState& state,
                       std::uint64_t fingerprint);
 
+/// One body's part of a checkpoint, in the file's format: its entry of the body table and its
+/// state. A distributed run gathers these on rank 0, which writes the one-process file.
+struct CheckpointBody {
+    std::string entry;
+    std::string state;
+};
+CheckpointBody checkpoint_body(const Body& body);
+
+/// write_checkpoint() from the parts of every body of the case, in case order.
+void write_checkpoint(const std::filesystem::path& path, const std::vector<CheckpointBody>& bodies,
+                      const CheckpointState& state, std::uint64_t fingerprint);
+
 /// Restores the bodies' positions, velocities and rotations from `path` into `scene`, which
 /// must be the freshly loaded scene of the same case.
 /// @param[out] warnings  appended to, e.g. when a body is split into a different number of
@@ -60,5 +72,10 @@ void write_checkpoint(const std::filesystem::path& path, const Scene& scene, con
 ///         belongs to another case (fingerprint, body names or counts differ)
 CheckpointState read_checkpoint(const std::filesystem::path& path, Scene& scene, std::uint64_t fingerprint,
                                 std::vector<std::string>& warnings);
+
+/// read_checkpoint() into the scene of one process of a distributed run: its bodies are the
+/// case's bodies `body_ids` (ascending) of `case_bodies`; the file is the one-process file.
+CheckpointState read_checkpoint(const std::filesystem::path& path, Scene& scene, const std::vector<Index>& body_ids,
+                                Index case_bodies, std::uint64_t fingerprint, std::vector<std::string>& warnings);
 
 } // namespace coro

@@ -15,6 +15,7 @@
 
 #include <corocontact/contact/contact_surface.hpp>
 #include <corocontact/contact/detector.hpp>
+#include <corocontact/core/function_ref.hpp>
 #include <corocontact/sim/body.hpp>
 #include <corocontact/sim/case_spec.hpp>
 #include <corocontact/solver/scene_matrix.hpp>
@@ -25,6 +26,84 @@ namespace coro {
 
 /// Speed [m/s] below which friction sticks (regularised Coulomb).
 constexpr double FRICTION_STICK_SPEED = 1e-3;
+
+/// A node carrying part of a contact point, with its barycentric coefficient.
+struct ContactShare {
+    Index surface = 0;        ///< whose node: a surface index of the evaluation (see ContactNodes)
+    Index node = 0;           ///< the node in its body's internal numbering
+    double coefficient = 0.0; ///< −1 for the penetrating vertex, w_i on the other face
+    bool fixed = false;       ///< the node is held in place
+};
+
+/// What one contact adds to the step. With c_r the coefficients of its shares, block (r, s)
+/// of the matrix gets c_r c_s K (nothing where either node is fixed: those rows and columns
+/// are identity) and share r's node the force −c_r F.
+struct ContactTerms {
+    Mat3 stiffness = Mat3::Zero(); ///< K: (h² k + h c_n) n nᵀ plus the friction term [kg]
+    Vec3 force = Vec3::Zero();     ///< F = k g n on the penetrating side [N]
+
+    Block3 block(const ContactShare& row, const ContactShare& column) const
+    {
+        if (row.fixed || column.fixed)
+            return Block3::Zero();
+        return row.coefficient * column.coefficient * stiffness;
+    }
+    Vec3 force_on(const ContactShare& share) const { return -share.coefficient * force; }
+};
+
+/// The terms of a list of contacts and the shares of each: contact i's shares are
+/// shares[share_offsets[i] .. share_offsets[i + 1]) (none for a contact of two obstacles).
+struct ContactRecords {
+    std::vector<ContactTerms> terms;
+    std::vector<Index> share_offsets{0};
+    std::vector<ContactShare> shares;
+
+    Index size() const { return static_cast<Index>(terms.size()); }
+};
+
+/// What the response reads of the nodes under the contact surfaces.
+class ContactNodes {
+public:
+    virtual ~ContactNodes() = default;
+    /// Whether surface `surface` is a body's, whose vertices move with nodes; obstacles carry
+    /// none.
+    virtual bool carries_nodes(Index surface) const = 0;
+    /// Velocity of node `node` of that body [m/s].
+    virtual Vec3 velocity(Index surface, Index node) const = 0;
+    virtual bool fixed(Index surface, Index node) const = 0;
+};
+
+/// The nodes of the scene's bodies, surface b being body b's.
+class BodyNodes final : public ContactNodes {
+public:
+    explicit BodyNodes(const std::vector<Body>& bodies) : m_bodies(bodies) {}
+    bool carries_nodes(Index surface) const override
+    {
+        return surface >= 0 && surface < static_cast<Index>(m_bodies.size());
+    }
+    Vec3 velocity(Index surface, Index node) const override
+    {
+        return m_bodies[static_cast<std::size_t>(surface)].velocities().segment<3>(3 * node);
+    }
+    bool fixed(Index surface, Index node) const override
+    {
+        return m_bodies[static_cast<std::size_t>(surface)].fixed()[static_cast<std::size_t>(node)] != 0;
+    }
+
+private:
+    const std::vector<Body>& m_bodies;
+};
+
+/// The terms and shares of every contact, in parallel over the contacts (each writes its own
+/// slots, so the result does not depend on the thread count).
+/// @param[in] surfaces  the surfaces the contacts index (bodies' and obstacles')
+/// @param[in] contacts  detection output (surfaces and plane obstacles, see ContactTarget)
+/// @param[in] nodes     velocities and fixed flags of the bodies' nodes
+/// @param[in] dt        the step h [s]
+/// @param[out] records  one entry per contact, in the contacts' order (capacity is kept)
+void evaluate_contacts(const std::vector<ContactSurface>& surfaces, const std::vector<ContactPoint>& contacts,
+                       const ContactNodes& nodes, const ContactSettings& settings, double dt,
+                       ContactRecords& records);
 
 /// What contact adds to one implicit Euler step of the scene: explicit forces per body, and
 /// the coupling blocks of the scene matrix.
@@ -44,22 +123,30 @@ public:
                  const std::vector<ContactPoint>& contacts, const ContactSettings& settings, double dt,
                  SceneMatrix& matrix);
 
+    /// Adds evaluated contacts to this process's rows, contact after contact in the records'
+    /// order: the forces on the nodes of its bodies, and the coupling blocks of their rows
+    /// (compute() is evaluate_contacts() and this for one process).
+    /// @param[in] records     the contacts, in the order one process holding every body adds them
+    /// @param[in] bodies      this process's bodies (forces() is sized by them)
+    /// @param[in] local_body  the index in `bodies` of a share's surface, or −1 if another
+    ///                        process holds it (its rows are left out)
+    /// @param[in] column      the column of a share's node in `matrix`: a row of a body here, or
+    ///                        a ghost row after them (see scene_exchange.hpp)
+    /// @param[in] column_order  null, or the order of the columns (CouplingBlocks::finish)
+    /// @param[in,out] matrix  its coupling() is refilled and finished
+    void apply(const ContactRecords& records, const std::vector<Body>& bodies,
+               FunctionRef<Index(Index surface)> local_body, FunctionRef<Index(Index surface, Index node)> column,
+               const std::vector<Index>* column_order, SceneMatrix& matrix);
+
     /// Per body, #3V: explicit contact forces at the step start (penalty) [N]; empty before
     /// the first compute().
     const std::vector<VecX>& forces() const { return m_forces; }
 
 private:
-    /// A node carrying part of a contact point, with its barycentric coefficient.
-    struct Share {
-        Index body = 0;
-        Index node = 0;
-        double coefficient = 0.0;
-    };
+    ContactRecords m_records;
     std::vector<VecX> m_forces;
-    std::vector<Index> m_share_offsets; // #contacts+1 into m_shares
     std::vector<Index> m_block_offsets; // #contacts+1 into the coupling entries
-    std::vector<Share> m_shares;
-    std::vector<Vec3> m_share_forces;   // force on each share's node [N]
+    std::vector<Vec3> m_share_forces;   // force on each share's node, of the shares here [N]
 };
 
 } // namespace coro

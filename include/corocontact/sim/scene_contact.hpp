@@ -39,6 +39,10 @@ void update_contact_surfaces(const std::vector<Body>& bodies, std::vector<Contac
 /// @param[out] component_of_body  #num_bodies
 void contact_components(const std::vector<ContactSurface>& surfaces, Index num_bodies,
                         std::vector<Index>& component_of_body);
+/// The same from the bodies' boxes (a distributed scene: the boxes gathered from every process).
+/// @param[in] body_boxes  #bodies
+/// @param[out] component_of_body  #bodies
+void contact_components(const std::vector<Aabb>& body_boxes, std::vector<Index>& component_of_body);
 
 /// The working memory of contact_components(), kept from step to step: a time step passing the
 /// same one allocates nothing once it has grown to the scene.
@@ -51,6 +55,10 @@ struct ComponentScratch {
 /// contact_components() with the working memory `scratch`.
 void contact_components(const std::vector<ContactSurface>& surfaces, Index num_bodies, ComponentScratch& scratch,
                         std::vector<Index>& component_of_body);
+/// contact_components() of the bodies' boxes with the working memory `scratch` (which may hold
+/// `body_boxes` itself).
+void contact_components_of_boxes(const std::vector<Aabb>& body_boxes, ComponentScratch& scratch,
+                                 std::vector<Index>& component_of_body);
 
 /// Detection settings from the case's [contact] table.
 DetectionSettings detection_settings(const ContactSettings& contact);

@@ -58,7 +58,9 @@ public:
     PreconditionerTimes preconditioner_times() const { return m_pcg.preconditioner_times(); }
 
     /// Step part 3: one PCG over the scene.
-    PcgResult solve(const PcgSettings& settings);
+    /// @param[in] exchange  null, or the halo and chunk sums of a scene spread over processes
+    ///                      (see PcgSolver::solve; collective then)
+    PcgResult solve(const PcgSettings& settings, SceneExchange* exchange = nullptr);
 
     /// Step part 4: v⁺ to the bodies and x⁺ = x + h v⁺.
     /// @throws NumericalError naming the body and node (mesh file order) of the first

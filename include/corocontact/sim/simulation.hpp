@@ -3,6 +3,7 @@
 /// @brief The scene and its time loop (dynamic) or load-step loop (static).
 
 #include <corocontact/sim/body.hpp>
+#include <corocontact/sim/body_ownership.hpp>
 #include <corocontact/sim/case_spec.hpp>
 #include <corocontact/contact/contact_surface.hpp>
 #include <corocontact/contact/detector.hpp>
@@ -28,7 +29,9 @@ struct Scene {
     std::vector<ContactSurface> surfaces; ///< with contact: one per body (body order), then one per
                                           ///< mesh obstacle; else empty
     std::vector<SurfaceMesh> obstacle_meshes; ///< rigid, static closed surfaces (mesh obstacles)
-    std::vector<ContactPoint> contacts;   ///< the last detection, sorted by (body, vertex, other)
+    std::vector<ContactPoint> contacts;   ///< the last detection, sorted by (body, vertex, other);
+                                          ///< distributed: those of this process's bodies' vertices,
+                                          ///< `other` in the case's numbering (see rank_contact.hpp)
     std::vector<PlaneObstacle> planes;    ///< rigid half-space obstacles (plane obstacles)
     std::vector<VecX> contact_forces;     ///< per body #3V: contact forces of the last detection [N]
 
@@ -59,6 +62,16 @@ struct RunSummary {
                                      ///< the axis-ray test disagreed, summed over all detections
     Index first_step = 0;            ///< the step the loop started from (> 0 after a restart)
     int stop_signal = 0;             ///< the signal that stopped the loop early, or 0
+};
+
+/// What a distributed run measured (zero in one process).
+struct RankStats {
+    Index ranks = 1;                       ///< processes of the run
+    double mpi_bytes_per_step = 0.0;       ///< payload this process received from the others per
+                                           ///< step of this run (solve and contact, not output) [B]
+    double solve_bytes_per_step = 0.0;     ///< of those, in the PCG: halo and dot products [B]
+    double cross_rank_contacts_mean = 0.0; ///< contact points per detection whose nodes lie on two
+                                           ///< or more processes (all processes)
 };
 
 /// Called for every frame to write: (step, simulated time or load factor).
@@ -95,8 +108,13 @@ public:
     ///                       contact surfaces are built here.
     /// @param[in] spec       settings (simulation, solver, contact); bodies are already in `scene`;
     ///                       must outlive the Simulation
-    /// @throws InputError if cross_check = "embree" and the build has no Embree
-    Simulation(Scene& scene, const CaseSpec& spec);
+    /// @param[in] distribution  null (one process holds every body), or this process's part of a
+    ///                       distributed run: `scene` holds its bodies (keep_bodies_of); then
+    ///                       construction and every call below are collective, and a failure on
+    ///                       any process throws on all (run_collectively)
+    /// @throws InputError if cross_check = "embree" and the build has no Embree, or the run is
+    ///         distributed (the cross-check runs in one process)
+    Simulation(Scene& scene, const CaseSpec& spec, const SceneDistribution* distribution = nullptr);
 
     /// Runs up to step `steps` (dynamic) or all load steps (static): start(), then step()
     /// until done or stopped. Frame 0 is the initial state; then every output_every-th step and
@@ -130,8 +148,11 @@ public:
     double time() const { return time_of(m_step); }
     /// Simulated time (dynamic) or load factor (static) after step `step`.
     double time_of(Index step) const;
-    /// The counters so far, means taken (see RunSummary).
+    /// The counters so far, means taken (see RunSummary); distributed: of all processes
+    /// (collective), timings this process's.
     RunSummary summary() const;
+    /// The distributed run's measures (collective when distributed).
+    RankStats rank_stats() const;
 
     ~Simulation();
     Simulation(const Simulation&) = delete;
@@ -141,11 +162,17 @@ private:
     void detect(RunSummary& summary);
     void dynamic_step();
     void static_step(Index load_step);
+    /// Runs `work` (no communication in it) so that a failure on any process throws on all.
+    void collectively(FunctionRef<void()> work);
+    /// The counters of all processes (collective when distributed); *_mean fields still sums.
+    RunSummary totals() const;
 
     Scene& m_scene;
     const CaseSpec& m_spec;
     struct EmbreeCheck;
     std::unique_ptr<EmbreeCheck> m_embree; // cross-check scenes, when asked for
+    struct Ranks;
+    std::unique_ptr<Ranks> m_ranks;        // distributed: the exchanges with the other processes
     SceneSystem m_system;                  // the scene-wide implicit Euler step
     ContactResponse m_response;            // of the last detection, used by the next step
     std::vector<Index> m_components;       // contact_components() of the last detection

@@ -4,6 +4,7 @@
 
 #include <corocontact/solver/bsr_matrix.hpp>
 #include <corocontact/solver/preconditioner.hpp>
+#include <corocontact/solver/scene_exchange.hpp>
 #include <corocontact/solver/scene_matrix.hpp>
 
 #include <memory>
@@ -42,6 +43,12 @@ struct PcgResult {
 /// bitwise the same for any thread count (AMG: see amg_preconditioner.hpp). Once its vectors
 /// have the scene's size, a solve allocates nothing.
 ///
+/// Distributed (an exchange given): this process holds the rows of its bodies, and the
+/// components are those of the whole scene (every process runs every component's recurrence);
+/// before each product the ghost rows of the multiplied vector are updated, and a component's
+/// dot products add the chunk partials of all processes in the global chunk order, so the
+/// iterates are bitwise those of one process holding every body.
+///
 /// A chunk-local preconditioner (Jacobi, block-Jacobi) runs inside the pass over the active
 /// chunks. A global one (AMG) is applied to the whole vector between the update of r and the
 /// partial sums, which then take a pass of their own: it is block diagonal by component like the
@@ -59,11 +66,16 @@ public:
 
     /// Solves A x = b for symmetric positive definite A, warm-started from the given x.
     /// @param[in] a       the scene matrix, #N×#N blocks, SPD (its coupling finished, every
-    ///                    coupling block within a component)
+    ///                    coupling block within a component); with an exchange, this
+    ///                    process's rows, coupling columns up to N + G
     /// @param[in] b       #3N right-hand side
     /// @param[in,out] x   #3N initial guess on entry, solution on exit
+    /// @param[in] exchange  null (one process), or the halo and component sums of a distributed
+    ///                    scene; then the call is collective, and every process returns the same
+    ///                    result or throws the same error
     /// @throws NumericalError if a non-finite value appears (A not SPD, NaN in b)
-    PcgResult solve(const SceneMatrix& a, CRef<VecX> b, Eigen::Ref<VecX> x, const PcgSettings& settings);
+    PcgResult solve(const SceneMatrix& a, CRef<VecX> b, Eigen::Ref<VecX> x, const PcgSettings& settings,
+                    SceneExchange* exchange = nullptr);
 
     /// Solves with one body's matrix (upper storage) as a scene of one body.
     PcgResult solve(const BsrMatrix& a, CRef<VecX> b, Eigen::Ref<VecX> x, const PcgSettings& settings);
@@ -93,18 +105,23 @@ private:
     /// p = z + β_k p over the active chunks.
     void direction_pass(const SceneMatrix& a);
     /// totals[k·width + j] = Σ partials[c·width + j] over the chunks c of component k, in chunk
-    /// order (inactive components included only when `all`).
+    /// order (inactive components included only when `all`; with an exchange, the chunks of all
+    /// processes and every component).
     void sum_by_component(const SceneMatrix& a, const std::vector<double>& partials, int width, bool all);
     /// The chunk flags of the active components.
     void mark_active_chunks(const SceneMatrix& a);
+    /// y = A x over the active chunks; with an exchange, x's ghost rows are updated first.
+    void multiply(const SceneMatrix& a, double* x, double* y, double* chunk_dots);
 
     PcgPreconditioner m_kind = PcgPreconditioner::JACOBI;
     std::unique_ptr<Preconditioner> m_preconditioner; // of m_kind; null before the first solve
-    VecX m_r, m_z, m_p, m_q;
+    VecX m_r, m_z, m_q;
+    VecX m_p;                             // #3(N + G): the multiplied vector, with ghost rows
     std::vector<Component> m_components;
     std::vector<char> m_chunk_active;     // one flag per chunk
     std::vector<double> m_partials;       // per chunk, up to two values
     std::vector<double> m_totals;         // per component, up to two values
+    SceneExchange* m_exchange = nullptr;  // of the solve in progress
 };
 
 } // namespace coro

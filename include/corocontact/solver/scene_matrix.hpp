@@ -59,6 +59,10 @@ public:
     /// component's first body. Every coupling block must join bodies of one component.
     /// @throws std::invalid_argument if the numbering is not of that form
     void set_components(const std::vector<Index>& component_of_body);
+    /// Components of a distributed scene (scene_exchange.hpp): component_of_body[b] for every
+    /// body of this process, in the numbering of the whole scene's `num_components`.
+    /// @throws std::invalid_argument if a number is outside [0, num_components)
+    void set_components(const std::vector<Index>& component_of_body, Index num_components);
     /// Number of components (initially one per body).
     Index num_components() const { return m_num_components; }
     /// The component of chunk c.
@@ -70,7 +74,8 @@ public:
 
     /// y = A x, and for every chunk c the partial dot product Σ_{i in c} x_i y_i in
     /// `chunk_dots[c]` (the caller adds them in chunk order).
-    /// @param[in] x            #3N scene DOFs
+    /// @param[in] x            #3N scene DOFs, followed by the ghost rows that coupling columns
+    ///                         ≥ N name in a distributed scene (scene_exchange.hpp)
     /// @param[out] y           #3N (must not alias x)
     /// @param[out] chunk_dots  #chunks, or null when no dot product is wanted
     /// @param[in] active       #chunks flags, or null for all: the rows (and dots) of chunks

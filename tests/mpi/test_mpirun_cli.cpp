@@ -1,0 +1,181 @@
+// The corocontact command under mpirun (-np 2 and 3): frames bitwise equal to one process,
+// bad input reported once with exit code 2 on every process, a divergence on one process
+// stopping all with 3, and checkpoints that continue on another number of processes.
+
+#include "mesh_fixtures.hpp"
+
+#include <corocontact/config.hpp>
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <sys/wait.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <regex>
+#include <sstream>
+#include <string>
+
+namespace fs = std::filesystem;
+using ::testing::HasSubstr;
+using ::testing::Not;
+
+namespace {
+
+const std::string DATA = CORO_MPI_TEST_DATA_DIR;
+
+struct Outcome {
+    int exit_code;
+    std::string out;
+    std::string err;
+};
+
+std::string slurp(const fs::path& path)
+{
+    std::ifstream file(path, std::ios::binary);
+    std::stringstream text;
+    text << file.rdbuf();
+    return text.str();
+}
+
+// Runs corocontact with `arguments`, alone (ranks = 0) or under mpirun -np ranks. OpenMPI
+// refuses root without the two variables; on 2 shared cores its waits must yield the core.
+// Under ASan, OpenMPI's own leaks at exit are suppressed (lsan.supp), nothing else.
+Outcome corocontact(int ranks, const std::string& arguments, const fs::path& dir)
+{
+    const fs::path out = dir / "stdout.txt", err = dir / "stderr.txt";
+    std::string command = std::string(CORO_CLI_PATH) + " " + arguments;
+    if (ranks > 0)
+        command = "OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_mpi_yield_when_idle=1 "
+                  "ASAN_OPTIONS=\"${ASAN_OPTIONS}:fast_unwind_on_malloc=0\" "
+                  "LSAN_OPTIONS=\"${LSAN_OPTIONS}:suppressions=" CORO_MPI_LSAN_SUPPRESSIONS "\" " +
+                  std::string(CORO_MPIEXEC) + " -np " + std::to_string(ranks) + " --oversubscribe --bind-to none " +
+                  command;
+    const int status = std::system((command + " > " + out.string() + " 2> " + err.string() + " < /dev/null").c_str());
+    return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, slurp(out), slurp(err)};
+}
+
+// Every frame file and the .pvd under `a` exist under `b` with the same bytes; the count.
+int expect_same_frames(const fs::path& a, const fs::path& b)
+{
+    int compared = 0;
+    for (const auto& entry : fs::recursive_directory_iterator(a)) {
+        const std::string extension = entry.path().extension().string();
+        if (!entry.is_regular_file() || (extension != ".vtu" && extension != ".vtm" && extension != ".pvd"))
+            continue;
+        const fs::path relative = fs::relative(entry.path(), a);
+        EXPECT_TRUE(fs::exists(b / relative)) << relative;
+        EXPECT_TRUE(slurp(entry.path()) == slurp(b / relative)) << relative << " differs";
+        ++compared;
+    }
+    return compared;
+}
+
+double json_number(const std::string& json, const std::string& key)
+{
+    std::smatch match;
+    const std::regex pattern("\"" + key + "\": ([-0-9.e+]+)");
+    return std::regex_search(json, match, pattern) ? std::stod(match[1]) : -1.0;
+}
+
+std::size_t count(const std::string& text, const std::string& what)
+{
+    std::size_t n = 0;
+    for (std::size_t at = text.find(what); at != std::string::npos; at = text.find(what, at + 1))
+        ++n;
+    return n;
+}
+
+} // namespace
+
+TEST(MpirunRun, FramesAreBitwiseThoseOfOneProcessOnTwoAndThreeProcesses)
+{
+    const fs::path dir = coro::test::scratch_dir("mpirun_frames");
+    const std::string pile = DATA + "/touching_pile.toml";
+    Outcome outcome = corocontact(0, "run " + pile + " --quiet --out " + (dir / "one").string(), dir);
+    ASSERT_EQ(outcome.exit_code, 0) << outcome.err;
+    for (const int ranks : {2, 3}) {
+        const fs::path out = dir / ("np" + std::to_string(ranks));
+        outcome = corocontact(ranks, "run " + pile + " --threads 1 --quiet --out " + out.string(), dir);
+        ASSERT_EQ(outcome.exit_code, 0) << outcome.err;
+        EXPECT_EQ(count(outcome.out, "touching_pile: 30 steps"), 1u) << "rank 0 alone prints:\n" << outcome.out;
+        // 4 frames of 12 bodies and a plane, their .vtm, the .pvd.
+        EXPECT_EQ(expect_same_frames(dir / "one", out), 4 * 13 + 4 + 1) << ranks << " processes";
+        const std::string summary = slurp(out / "touching_pile.summary.json");
+        EXPECT_EQ(json_number(summary, "ranks"), ranks);
+        EXPECT_GT(json_number(summary, "cross_rank_contacts_mean"), 1.0) << "bodies on different processes touch";
+        EXPECT_GT(json_number(summary, "mpi_bytes_per_step"), 0.0);
+        EXPECT_EQ(count(summary, "\"rank\": "), static_cast<std::size_t>(ranks));
+        EXPECT_EQ(json_number(summary, "contacts_mean"),
+                  json_number(slurp(dir / "one" / "touching_pile.summary.json"), "contacts_mean"));
+    }
+}
+
+TEST(MpirunRun, BadInputIsReportedOnceAndEveryProcessExitsWithTwo)
+{
+    const fs::path dir = coro::test::scratch_dir("mpirun_bad_input");
+    std::string text = slurp(DATA + "/touching_pile.toml");
+    text.replace(text.find("stiffness = 2e5"), 15, "stifness = 2e5");
+    std::ofstream(dir / "typo.toml") << text;
+    const Outcome outcome = corocontact(2, "run " + (dir / "typo.toml").string() + " --quiet --out " +
+                                               (dir / "out").string(), dir);
+    EXPECT_EQ(outcome.exit_code, 2);
+    EXPECT_EQ(count(outcome.err, "error: "), 1u) << outcome.err;
+    EXPECT_THAT(outcome.err, HasSubstr("typo.toml:"));
+    EXPECT_THAT(outcome.err, HasSubstr("stifness"));
+    EXPECT_FALSE(fs::exists(dir / "out")) << "nothing written for bad input";
+}
+
+#if CORO_WITH_AMG
+TEST(MpirunRun, AmgIsRefusedForADistributedRun)
+{
+    const fs::path dir = coro::test::scratch_dir("mpirun_amg");
+    std::string text = slurp(DATA + "/touching_pile.toml");
+    text.replace(text.find("\"block_jacobi\""), 14, "\"amg\"");
+    std::ofstream(dir / "amg.toml") << text;
+    const Outcome outcome =
+        corocontact(2, "run " + (dir / "amg.toml").string() + " --quiet --out " + (dir / "out").string(), dir);
+    EXPECT_EQ(outcome.exit_code, 2);
+    EXPECT_EQ(count(outcome.err, "error: "), 1u) << outcome.err;
+    EXPECT_THAT(outcome.err, HasSubstr("amg.toml: solver.preconditioner = \"amg\" runs in one process only, and this "
+                                       "run has 2 (mpirun)"));
+    EXPECT_FALSE(fs::exists(dir / "out")) << "nothing written for bad input";
+}
+#endif
+
+TEST(MpirunRun, DivergenceOnOneProcessStopsAllWithThree)
+{
+    const fs::path dir = coro::test::scratch_dir("mpirun_divergence");
+    const Outcome outcome =
+        corocontact(2, "run " + DATA + "/diverging_pair.toml --quiet --out " + (dir / "out").string(), dir);
+    EXPECT_EQ(outcome.exit_code, 3);
+    EXPECT_EQ(count(outcome.err, "error: "), 1u) << outcome.err;
+    EXPECT_THAT(outcome.err, HasSubstr("step 2 (t = 0.02)"));
+    EXPECT_THAT(outcome.err, HasSubstr("body 'soft': element"));
+}
+
+TEST(MpirunRun, CheckpointOfTwoProcessesContinuesOnThreeAndAlone)
+{
+    const fs::path dir = coro::test::scratch_dir("mpirun_restart");
+    const std::string pile = DATA + "/touching_pile.toml";
+    const fs::path one = dir / "one", three = dir / "three", alone = dir / "alone";
+    Outcome outcome = corocontact(0, "run " + pile + " --quiet --out " + one.string(), dir);
+    ASSERT_EQ(outcome.exit_code, 0) << outcome.err;
+    for (const fs::path& out : {three, alone}) {
+        outcome = corocontact(2, "run " + pile + " --steps 20 --checkpoint-every 10 --quiet --out " + out.string(), dir);
+        ASSERT_EQ(outcome.exit_code, 0) << outcome.err;
+        EXPECT_THAT(outcome.out, HasSubstr("checkpoint: "));
+    }
+    const std::string checkpoint = "/touching_pile.checkpoint";
+    outcome = corocontact(3, "run " + pile + " --quiet --restart " + three.string() + checkpoint + " --out " +
+                                 three.string(), dir);
+    ASSERT_EQ(outcome.exit_code, 0) << outcome.err;
+    EXPECT_THAT(outcome.err, Not(HasSubstr("warning")));
+    EXPECT_EQ(expect_same_frames(one, three), 4 * 13 + 4 + 1);
+    outcome = corocontact(0, "run " + pile + " --quiet --restart " + alone.string() + checkpoint + " --out " +
+                                 alone.string(), dir);
+    ASSERT_EQ(outcome.exit_code, 0) << outcome.err;
+    EXPECT_EQ(expect_same_frames(one, alone), 4 * 13 + 4 + 1);
+}
