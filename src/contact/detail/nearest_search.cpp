@@ -311,8 +311,9 @@ void NearestSearch::find_packet(const Vec3* points, int count, const double* dis
         const auto n = static_cast<std::size_t>(stack[top]);
         const TreeAccess::Node& node = nodes[n];
         const FacePlanes* planes = m_planes ? m_planes->get(n, m_tree, m_data, m_stride) : nullptr;
-        int needed = 0; // bit k: some point needs child k
-        for (int k = 0; k < node.count; ++k) {
+        // All four lanes, used or not (an unused lane's box is empty: its bound is +∞), without
+        // a branch on the child count.
+        for (int k = 0; k < 4; ++k) {
             F8 sum = zero;
             for (int j = 0; j < 3; ++j) {
                 const F8 d = max(max(F8::splat(node.lo[j][k]) - p_hi[j], p_lo[j] - F8::splat(node.hi[j][k])), zero);
@@ -326,10 +327,13 @@ void NearestSearch::find_packet(const Vec3* points, int count, const double* dis
             }
             sum.store(d2[k]);
             lanes[k] = active & static_cast<unsigned>((sum <= limit).bits());
-            needed |= lanes[k] != 0 ? 1 << k : 0;
         }
-        // The node's faces, each for the points that need it; then its child nodes, pushed
-        // farther first by the keys of the first point that needs each.
+        // bit k: some point needs child k
+        const int needed = ((lanes[0] != 0 ? 1 : 0) | (lanes[1] != 0 ? 2 : 0) | (lanes[2] != 0 ? 4 : 0) |
+                            (lanes[3] != 0 ? 8 : 0)) &
+                           ((1 << node.count) - 1);
+        // The node's faces, each for the points that need it; then its child nodes. Their order
+        // on the stack matters little: the searches start with bounds close to their answers.
         for (int m = needed & node.face_mask; m != 0; m &= m - 1) {
             const int k = __builtin_ctz(static_cast<unsigned>(m));
             const auto slot = static_cast<std::size_t>(-1 - node.child[k]);
@@ -355,22 +359,12 @@ void NearestSearch::find_packet(const Vec3* points, int count, const double* dis
             if (improved)
                 limit = F8::load(threshold);
         }
-        for (int m = needed & ~node.face_mask; m != 0;) {
-            int far = __builtin_ctz(static_cast<unsigned>(m));
-            float far_d2 = d2[far][__builtin_ctz(lanes[far])];
-            for (int rest = m & (m - 1); rest != 0; rest &= rest - 1) {
-                const int k = __builtin_ctz(static_cast<unsigned>(rest));
-                const float key = d2[k][__builtin_ctz(lanes[k])];
-                if (key > far_d2) {
-                    far = k;
-                    far_d2 = key;
-                }
-            }
-            stack[top] = node.child[far];
-            stack_lanes[top] = lanes[far];
-            F8::load(d2[far]).store(stack_d2[top]);
+        for (int m = needed & ~node.face_mask; m != 0; m &= m - 1) {
+            const int k = __builtin_ctz(static_cast<unsigned>(m));
+            stack[top] = node.child[k];
+            stack_lanes[top] = lanes[k];
+            F8::load(d2[k]).store(stack_d2[top]);
             ++top;
-            m &= ~(1 << far);
         }
     }
     for (int q = 0; q < count; ++q) {
