@@ -301,18 +301,12 @@ void NearestSearch::find_packet(const Vec3* points, int count, const double* dis
     stack[top] = 0;
     stack_lanes[top] = (1u << count) - 1u;
     zero.store(stack_d2[top++]);
-    float d2[4][PACKET];
-    unsigned lanes[4];
-    while (top > 0) {
-        --top;
-        const unsigned active = stack_lanes[top] & static_cast<unsigned>((F8::load(stack_d2[top]) <= limit).bits());
-        if (active == 0)
-            continue;
-        const auto n = static_cast<std::size_t>(stack[top]);
+    // The bounds of the four children of node n for the points in `active` (an unused child's
+    // box is empty: its bound is +∞), into d2[child][point]; lanes[child]: the points whose
+    // bound is within their threshold. Returns bit k set when some point needs child k.
+    const auto bound_children = [&](std::size_t n, unsigned active, float (&d2)[4][PACKET], unsigned (&lanes)[4]) {
         const TreeAccess::Node& node = nodes[n];
         const FacePlanes* planes = m_planes ? m_planes->get(n, m_tree, m_data, m_stride) : nullptr;
-        // All four lanes, used or not (an unused lane's box is empty: its bound is +∞), without
-        // a branch on the child count.
         for (int k = 0; k < 4; ++k) {
             F8 sum = zero;
             for (int j = 0; j < 3; ++j) {
@@ -328,12 +322,12 @@ void NearestSearch::find_packet(const Vec3* points, int count, const double* dis
             sum.store(d2[k]);
             lanes[k] = active & static_cast<unsigned>((sum <= limit).bits());
         }
-        // bit k: some point needs child k
-        const int needed = ((lanes[0] != 0 ? 1 : 0) | (lanes[1] != 0 ? 2 : 0) | (lanes[2] != 0 ? 4 : 0) |
-                            (lanes[3] != 0 ? 8 : 0)) &
-                           ((1 << node.count) - 1);
-        // The node's faces, each for the points that need it; then its child nodes. Their order
-        // on the stack matters little: the searches start with bounds close to their answers.
+        return ((lanes[0] != 0 ? 1 : 0) | (lanes[1] != 0 ? 2 : 0) | (lanes[2] != 0 ? 4 : 0) | (lanes[3] != 0 ? 8 : 0)) &
+               ((1 << node.count) - 1);
+    };
+    // The faces among `needed` children of `node`, each for the points that need it.
+    const auto test_faces = [&](const TreeAccess::Node& node, int needed, const float (&d2)[4][PACKET],
+                                const unsigned (&lanes)[4]) {
         for (int m = needed & node.face_mask; m != 0; m &= m - 1) {
             const int k = __builtin_ctz(static_cast<unsigned>(m));
             const auto slot = static_cast<std::size_t>(-1 - node.child[k]);
@@ -359,8 +353,34 @@ void NearestSearch::find_packet(const Vec3* points, int count, const double* dis
             if (improved)
                 limit = F8::load(threshold);
         }
+    };
+    while (top > 0) {
+        --top;
+        const unsigned active = stack_lanes[top] & static_cast<unsigned>((F8::load(stack_d2[top]) <= limit).bits());
+        if (active == 0)
+            continue;
+        const auto n = static_cast<std::size_t>(stack[top]);
+        const TreeAccess::Node& node = nodes[n];
+        float d2[4][PACKET];
+        unsigned lanes[4];
+        const int needed = bound_children(n, active, d2, lanes);
+        test_faces(node, needed, d2, lanes);
+        // The child nodes: those of faces only (the last level) at once, the others onto the
+        // stack. Their order matters little: the searches start with bounds close to their
+        // answers.
         for (int m = needed & ~node.face_mask; m != 0; m &= m - 1) {
             const int k = __builtin_ctz(static_cast<unsigned>(m));
+            const auto c = static_cast<std::size_t>(node.child[k]);
+            if (nodes[c].face_mask == (1 << nodes[c].count) - 1) {
+                const unsigned child_active = lanes[k] & static_cast<unsigned>((F8::load(d2[k]) <= limit).bits());
+                if (child_active == 0)
+                    continue;
+                float child_d2[4][PACKET];
+                unsigned child_lanes[4];
+                const int child_needed = bound_children(c, child_active, child_d2, child_lanes);
+                test_faces(nodes[c], child_needed, child_d2, child_lanes);
+                continue;
+            }
             stack[top] = node.child[k];
             stack_lanes[top] = lanes[k];
             F8::load(d2[k]).store(stack_d2[top]);
