@@ -292,15 +292,14 @@ void NearestSearch::find_packet(const Vec3* points, int count, const double* dis
     const F8 zero = F8::zero(), shrink = F8::splat(1.0f - 0x1p-18f);
     F8 limit = F8::load(threshold);
 
-    // Stack entries: a node, the points that need it, and their keys (lower bounds of the
-    // squared distance).
+    // Stack entries: a node and the points that need it. Their bounds are not checked again
+    // when the node comes off the stack: the searches start close to their answers, so the
+    // thresholds hardly tighten meanwhile, and the children are bounded anyway.
     Index stack[TreeAccess::STACK_SIZE];
     unsigned stack_lanes[TreeAccess::STACK_SIZE];
-    float stack_d2[TreeAccess::STACK_SIZE][PACKET];
     int top = 0;
     stack[top] = 0;
-    stack_lanes[top] = (1u << count) - 1u;
-    zero.store(stack_d2[top++]);
+    stack_lanes[top++] = (1u << count) - 1u;
     // The bounds of the four children of node n for the points in `active` (an unused child's
     // box is empty: its bound is +∞), into d2[child][point]; lanes[child]: the points whose
     // bound is within their threshold. Returns bit k set when some point needs child k.
@@ -356,9 +355,7 @@ void NearestSearch::find_packet(const Vec3* points, int count, const double* dis
     };
     while (top > 0) {
         --top;
-        const unsigned active = stack_lanes[top] & static_cast<unsigned>((F8::load(stack_d2[top]) <= limit).bits());
-        if (active == 0)
-            continue;
+        const unsigned active = stack_lanes[top];
         const auto n = static_cast<std::size_t>(stack[top]);
         const TreeAccess::Node& node = nodes[n];
         float d2[4][PACKET];
@@ -366,25 +363,19 @@ void NearestSearch::find_packet(const Vec3* points, int count, const double* dis
         const int needed = bound_children(n, active, d2, lanes);
         test_faces(node, needed, d2, lanes);
         // The child nodes: those of faces only (the last level) at once, the others onto the
-        // stack. Their order matters little: the searches start with bounds close to their
-        // answers.
+        // stack, in any order (it matters little for the same reason).
         for (int m = needed & ~node.face_mask; m != 0; m &= m - 1) {
             const int k = __builtin_ctz(static_cast<unsigned>(m));
             const auto c = static_cast<std::size_t>(node.child[k]);
             if (nodes[c].face_mask == (1 << nodes[c].count) - 1) {
-                const unsigned child_active = lanes[k] & static_cast<unsigned>((F8::load(d2[k]) <= limit).bits());
-                if (child_active == 0)
-                    continue;
                 float child_d2[4][PACKET];
                 unsigned child_lanes[4];
-                const int child_needed = bound_children(c, child_active, child_d2, child_lanes);
+                const int child_needed = bound_children(c, lanes[k], child_d2, child_lanes);
                 test_faces(nodes[c], child_needed, child_d2, child_lanes);
                 continue;
             }
             stack[top] = node.child[k];
-            stack_lanes[top] = lanes[k];
-            F8::load(d2[k]).store(stack_d2[top]);
-            ++top;
+            stack_lanes[top++] = lanes[k];
         }
     }
     for (int q = 0; q < count; ++q) {
