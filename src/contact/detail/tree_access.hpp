@@ -108,26 +108,4 @@ inline void push_by_key(const TreeAccess::Node& node, int lanes, const float* ke
     }
 }
 
-/// Pushes the child nodes among `lanes` of `node` (face lanes are skipped), each with its key,
-/// the smallest key last, so that the nearest is popped first (cheaper than push_by_key, for
-/// walks whose answer does not depend on the order).
-inline void push_nearest_last(const TreeAccess::Node& node, int lanes, const float* keys, Index* stack,
-                              float* stack_keys, int& top)
-{
-    const int first = top;
-    for (int m = lanes & ~node.face_mask; m != 0; m &= m - 1) {
-        const int k = __builtin_ctz(static_cast<unsigned>(m));
-        stack[top] = node.child[k];
-        stack_keys[top++] = keys[k];
-    }
-    int nearest = top - 1;
-    for (int i = first; i < top - 1; ++i)
-        if (stack_keys[i] < stack_keys[nearest])
-            nearest = i;
-    if (nearest >= first) {
-        std::swap(stack[nearest], stack[top - 1]);
-        std::swap(stack_keys[nearest], stack_keys[top - 1]);
-    }
-}
-
 } // namespace coro::detail
