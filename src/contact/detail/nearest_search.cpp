@@ -50,13 +50,14 @@ void face_plane(const double* A, const double* B, const double* C, FacePlanes& w
     w.slack[k] = (slack + std::abs(off) * 0x1p-20f) * (1.0f + 0x1p-22f);
 }
 
-/// The slab of child node `node` into lane k: along the normal u of the node's three slab
-/// corners, the range of u·x over its distinct vertices (so over its faces), as offset ± slack
-/// with the float rounding of u and the offset and the double rounding of u·x covered.
-void node_slab(const AabbTree& tree, std::size_t node, const double* data, std::ptrdiff_t stride, FacePlanes& w,
-               int k)
+/// The slab of child node k of `parent` into lane k: along the normal u of the child's three
+/// slab corners, the range of u·x over its distinct vertices (so over its faces), as offset ±
+/// slack with the float rounding of u and the offset and the double rounding of u·x covered.
+void node_slab(const AabbTree& tree, const TreeAccess::Node& parent, int k, const double* data, std::ptrdiff_t stride,
+               FacePlanes& w)
 {
     no_plane(w, k);
+    const auto node = static_cast<std::size_t>(parent.child[k]);
     const auto& start = TreeAccess::slab_start(tree);
     const auto begin = static_cast<std::size_t>(start[node]);
     const auto end = static_cast<std::size_t>(start[node + 1]);
@@ -79,11 +80,11 @@ void node_slab(const AabbTree& tree, std::size_t node, const double* data, std::
         lo = std::min(lo, t);
         hi = std::max(hi, t);
     }
-    // Bounds |x| of every coordinate x of the node's vertices (they lie in its float box).
-    const TreeAccess::NodeBox& box = TreeAccess::node_boxes(tree)[node];
+    // Bounds |x| of every coordinate x of the node's vertices (they lie in its float box, lane k
+    // of the parent, which is at hand).
     double magnitude = 0.0;
     for (int j = 0; j < 3; ++j)
-        magnitude += std::abs(static_cast<double>(box.lo[j])) + std::abs(static_cast<double>(box.hi[j]));
+        magnitude += std::abs(static_cast<double>(parent.lo[j][k])) + std::abs(static_cast<double>(parent.hi[j][k]));
     const double mid = 0.5 * (lo + hi);
     const float off = static_cast<float>(mid);
     const double slack = 0.5 * (hi - lo) + std::abs(static_cast<double>(off) - mid) + 1e-14 * magnitude;
@@ -105,7 +106,7 @@ void compute_face_planes(const AabbTree& tree, std::size_t node, const double* d
         if (k >= w.count) {
             no_plane(planes, k);
         } else if (w.child[k] >= 0) {
-            node_slab(tree, static_cast<std::size_t>(w.child[k]), data, stride, planes, k);
+            node_slab(tree, w, k, data, stride, planes);
         } else {
             const Index* fv = TreeAccess::slot_vertices(tree, static_cast<std::size_t>(-1 - w.child[k]));
             face_plane(data + stride * fv[0], data + stride * fv[1], data + stride * fv[2], planes, k);
