@@ -152,13 +152,16 @@ NearestPoint NearestSearch::find(const Vec3& point, double distance_bound, Index
     // The best so far: the hint face (measured as every face is below), else none with the
     // bound as the squared distance to beat. Of faces with the same computed squared distance
     // the smallest index wins, so neither the start nor the traversal order changes the answer.
+    // The hint face, once measured, is not measured again by the walk: it would get the same.
     double best_d2 = std::numeric_limits<double>::infinity();
     if (distance_bound < std::numeric_limits<double>::infinity())
         best_d2 = distance_bound * distance_bound * (1.0 + 1e-6) + std::numeric_limits<double>::min();
+    Index measured = -1;
     if (faces != nullptr && hint_face >= 0 && hint_face < faces->rows()) {
         const auto corner = [&](int c) { return Vec3(m_data + m_stride * (*faces)(hint_face, c)); };
         const TrianglePoint q = closest_point_on_triangle(point, corner(0), corner(1), corner(2));
         const double d2 = (q.point - point).squaredNorm();
+        measured = hint_face;
         if (d2 <= best_d2) {
             best_d2 = d2;
             best.face = hint_face;
@@ -218,14 +221,14 @@ NearestPoint NearestSearch::find(const Vec3& point, double distance_bound, Index
         // the child nodes, the nearest on top of the stack.
         for (int m = lanes & node.face_mask; m != 0; m &= m - 1) {
             const int k = __builtin_ctz(static_cast<unsigned>(m));
-            if (d2[k] > threshold)
-                continue;
             const auto slot = static_cast<std::size_t>(-1 - node.child[k]);
+            const Index f = TreeAccess::face_of_slot(m_tree)[slot];
+            if (d2[k] > threshold || f == measured)
+                continue;
             const Index* fv = TreeAccess::slot_vertices(m_tree, slot);
             const TrianglePoint q = closest_point_on_triangle(point, Vec3(m_data + m_stride * fv[0]),
                                                               Vec3(m_data + m_stride * fv[1]), Vec3(m_data + m_stride * fv[2]));
             const double dq = (q.point - point).squaredNorm();
-            const Index f = TreeAccess::face_of_slot(m_tree)[slot];
             if (dq < best_d2 || (dq == best_d2 && f < best.face)) {
                 best_d2 = dq;
                 threshold = float_threshold(best_d2);
@@ -257,6 +260,8 @@ void NearestSearch::find_packet(const Vec3* points, int count, const double* dis
     double best_d2[PACKET];
     float threshold[PACKET];
     float lo[3][PACKET], hi[3][PACKET], pf[3][PACKET], error[PACKET];
+    Index measured[PACKET]; // the hint face, once measured: the walk would measure it the same
+    std::fill(measured, measured + PACKET, Index{-1});
     for (int q = 0; q < PACKET; ++q) {
         const Vec3& p = points[q < count ? q : 0];
         for (int j = 0; j < 3; ++j) {
@@ -275,6 +280,7 @@ void NearestSearch::find_packet(const Vec3* points, int count, const double* dis
             const auto corner = [&](int c) { return Vec3(m_data + m_stride * (*faces)(hint, c)); };
             const TrianglePoint t = closest_point_on_triangle(p, corner(0), corner(1), corner(2));
             const double d2 = (t.point - p).squaredNorm();
+            measured[q] = hint;
             if (d2 <= best_d2[q]) {
                 best_d2[q] = d2;
                 out[q].face = hint;
@@ -337,7 +343,7 @@ void NearestSearch::find_packet(const Vec3* points, int count, const double* dis
             bool improved = false;
             for (unsigned l = lanes[k]; l != 0; l &= l - 1) {
                 const int q = __builtin_ctz(l);
-                if (d2[k][q] > threshold[q])
+                if (d2[k][q] > threshold[q] || f == measured[q])
                     continue;
                 const TrianglePoint t = closest_point_on_triangle(points[q], a, b, c);
                 const double dq = (t.point - points[q]).squaredNorm();
