@@ -307,3 +307,39 @@ TEST(AabbTree, NearestAndAxisLineFromAFarPoint)
     });
     EXPECT_GT(visits, 0);
 }
+
+TEST(FloatRounding, StepsOutwardAndStaysFinite)
+{
+    // The outward rounding of the walks' boxes: a float below (above) x beyond the nearest one,
+    // and for values beyond the float range the largest finite float of that sign, as the
+    // library's fmin/fmax would clamp them.
+    const float largest = std::numeric_limits<float>::max();
+    const auto reference_down = [&](double x) {
+        const float f = static_cast<float>(x);
+        return std::fmin(f - (std::abs(f) * 0x1p-23f + 0x1p-126f), largest);
+    };
+    const auto reference_up = [&](double x) {
+        const float f = static_cast<float>(x);
+        return std::fmax(f + (std::abs(f) * 0x1p-23f + 0x1p-126f), -largest);
+    };
+    std::mt19937 rng(7);
+    std::uniform_real_distribution<double> mantissa(-1.0, 1.0);
+    std::uniform_int_distribution<int> exponent(-150, 120);
+    for (int i = 0; i < 20000; ++i) {
+        const double x = std::ldexp(mantissa(rng), exponent(rng));
+        const float down = detail::float_down(x), up = detail::float_up(x);
+        EXPECT_LT(static_cast<double>(down), x) << x;
+        EXPECT_GT(static_cast<double>(up), x) << x;
+        EXPECT_LT(down, static_cast<float>(x)) << x;
+        EXPECT_GT(up, static_cast<float>(x)) << x;
+        EXPECT_EQ(down, reference_down(x)) << x;
+        EXPECT_EQ(up, reference_up(x)) << x;
+    }
+    const double inf = std::numeric_limits<double>::infinity();
+    for (const double x : {inf, 1e300, 3.5e38, -inf, -1e300, -3.5e38, std::nan(""), 0.0, -0.0}) {
+        EXPECT_EQ(detail::float_down(x), reference_down(x)) << x;
+        EXPECT_EQ(detail::float_up(x), reference_up(x)) << x;
+    }
+    EXPECT_EQ(detail::float_down(inf), largest);
+    EXPECT_EQ(detail::float_up(-inf), -largest);
+}

@@ -50,13 +50,14 @@ void face_plane(const double* A, const double* B, const double* C, FacePlanes& w
     w.slack[k] = (slack + std::abs(off) * 0x1p-20f) * (1.0f + 0x1p-22f);
 }
 
-/// The slab of child node `node` into lane k: along the normal u of the node's three slab
-/// corners, the range of u·x over its distinct vertices (so over its faces), as offset ± slack
-/// with the float rounding of u and the offset and the double rounding of u·x covered.
-void node_slab(const AabbTree& tree, std::size_t node, const double* data, std::ptrdiff_t stride, FacePlanes& w,
-               int k)
+/// The slab of child node k of `parent` into lane k: along the normal u of the child's three
+/// slab corners, the range of u·x over its distinct vertices (so over its faces), as offset ±
+/// slack with the float rounding of u and the offset and the double rounding of u·x covered.
+void node_slab(const AabbTree& tree, const TreeAccess::Node& parent, int k, const double* data, std::ptrdiff_t stride,
+               FacePlanes& w)
 {
     no_plane(w, k);
+    const auto node = static_cast<std::size_t>(parent.child[k]);
     const auto& start = TreeAccess::slab_start(tree);
     const auto begin = static_cast<std::size_t>(start[node]);
     const auto end = static_cast<std::size_t>(start[node + 1]);
@@ -79,11 +80,11 @@ void node_slab(const AabbTree& tree, std::size_t node, const double* data, std::
         lo = std::min(lo, t);
         hi = std::max(hi, t);
     }
-    // Bounds |x| of every coordinate x of the node's vertices (they lie in its float box).
-    const TreeAccess::NodeBox& box = TreeAccess::node_boxes(tree)[node];
+    // Bounds |x| of every coordinate x of the node's vertices (they lie in its float box, lane k
+    // of the parent, which is at hand).
     double magnitude = 0.0;
     for (int j = 0; j < 3; ++j)
-        magnitude += std::abs(static_cast<double>(box.lo[j])) + std::abs(static_cast<double>(box.hi[j]));
+        magnitude += std::abs(static_cast<double>(parent.lo[j][k])) + std::abs(static_cast<double>(parent.hi[j][k]));
     const double mid = 0.5 * (lo + hi);
     const float off = static_cast<float>(mid);
     const double slack = 0.5 * (hi - lo) + std::abs(static_cast<double>(off) - mid) + 1e-14 * magnitude;
@@ -105,7 +106,7 @@ void compute_face_planes(const AabbTree& tree, std::size_t node, const double* d
         if (k >= w.count) {
             no_plane(planes, k);
         } else if (w.child[k] >= 0) {
-            node_slab(tree, static_cast<std::size_t>(w.child[k]), data, stride, planes, k);
+            node_slab(tree, w, k, data, stride, planes);
         } else {
             const Index* fv = TreeAccess::slot_vertices(tree, static_cast<std::size_t>(-1 - w.child[k]));
             face_plane(data + stride * fv[0], data + stride * fv[1], data + stride * fv[2], planes, k);
@@ -151,13 +152,16 @@ NearestPoint NearestSearch::find(const Vec3& point, double distance_bound, Index
     // The best so far: the hint face (measured as every face is below), else none with the
     // bound as the squared distance to beat. Of faces with the same computed squared distance
     // the smallest index wins, so neither the start nor the traversal order changes the answer.
+    // The hint face, once measured, is not measured again by the walk: it would get the same.
     double best_d2 = std::numeric_limits<double>::infinity();
     if (distance_bound < std::numeric_limits<double>::infinity())
         best_d2 = distance_bound * distance_bound * (1.0 + 1e-6) + std::numeric_limits<double>::min();
+    Index measured = -1;
     if (faces != nullptr && hint_face >= 0 && hint_face < faces->rows()) {
         const auto corner = [&](int c) { return Vec3(m_data + m_stride * (*faces)(hint_face, c)); };
         const TrianglePoint q = closest_point_on_triangle(point, corner(0), corner(1), corner(2));
         const double d2 = (q.point - point).squaredNorm();
+        measured = hint_face;
         if (d2 <= best_d2) {
             best_d2 = d2;
             best.face = hint_face;
@@ -217,14 +221,14 @@ NearestPoint NearestSearch::find(const Vec3& point, double distance_bound, Index
         // the child nodes, the nearest on top of the stack.
         for (int m = lanes & node.face_mask; m != 0; m &= m - 1) {
             const int k = __builtin_ctz(static_cast<unsigned>(m));
-            if (d2[k] > threshold)
-                continue;
             const auto slot = static_cast<std::size_t>(-1 - node.child[k]);
+            const Index f = TreeAccess::face_of_slot(m_tree)[slot];
+            if (d2[k] > threshold || f == measured)
+                continue;
             const Index* fv = TreeAccess::slot_vertices(m_tree, slot);
             const TrianglePoint q = closest_point_on_triangle(point, Vec3(m_data + m_stride * fv[0]),
                                                               Vec3(m_data + m_stride * fv[1]), Vec3(m_data + m_stride * fv[2]));
             const double dq = (q.point - point).squaredNorm();
-            const Index f = TreeAccess::face_of_slot(m_tree)[slot];
             if (dq < best_d2 || (dq == best_d2 && f < best.face)) {
                 best_d2 = dq;
                 threshold = float_threshold(best_d2);
@@ -256,6 +260,8 @@ void NearestSearch::find_packet(const Vec3* points, int count, const double* dis
     double best_d2[PACKET];
     float threshold[PACKET];
     float lo[3][PACKET], hi[3][PACKET], pf[3][PACKET], error[PACKET];
+    Index measured[PACKET]; // the hint face, once measured: the walk would measure it the same
+    std::fill(measured, measured + PACKET, Index{-1});
     for (int q = 0; q < PACKET; ++q) {
         const Vec3& p = points[q < count ? q : 0];
         for (int j = 0; j < 3; ++j) {
@@ -274,6 +280,7 @@ void NearestSearch::find_packet(const Vec3* points, int count, const double* dis
             const auto corner = [&](int c) { return Vec3(m_data + m_stride * (*faces)(hint, c)); };
             const TrianglePoint t = closest_point_on_triangle(p, corner(0), corner(1), corner(2));
             const double d2 = (t.point - p).squaredNorm();
+            measured[q] = hint;
             if (d2 <= best_d2[q]) {
                 best_d2[q] = d2;
                 out[q].face = hint;
@@ -292,27 +299,21 @@ void NearestSearch::find_packet(const Vec3* points, int count, const double* dis
     const F8 zero = F8::zero(), shrink = F8::splat(1.0f - 0x1p-18f);
     F8 limit = F8::load(threshold);
 
-    // Stack entries: a node, the points that need it, and their keys (lower bounds of the
-    // squared distance).
+    // Stack entries: a node and the points that need it. Their bounds are not checked again
+    // when the node comes off the stack: the searches start close to their answers, so the
+    // thresholds hardly tighten meanwhile, and the children are bounded anyway.
     Index stack[TreeAccess::STACK_SIZE];
     unsigned stack_lanes[TreeAccess::STACK_SIZE];
-    float stack_d2[TreeAccess::STACK_SIZE][PACKET];
     int top = 0;
     stack[top] = 0;
-    stack_lanes[top] = (1u << count) - 1u;
-    zero.store(stack_d2[top++]);
-    float d2[4][PACKET];
-    unsigned lanes[4];
-    while (top > 0) {
-        --top;
-        const unsigned active = stack_lanes[top] & static_cast<unsigned>((F8::load(stack_d2[top]) <= limit).bits());
-        if (active == 0)
-            continue;
-        const auto n = static_cast<std::size_t>(stack[top]);
+    stack_lanes[top++] = (1u << count) - 1u;
+    // The bounds of the four children of node n for the points in `active` (an unused child's
+    // box is empty: its bound is +∞), into d2[child][point]; lanes[child]: the points whose
+    // bound is within their threshold. Returns bit k set when some point needs child k.
+    const auto bound_children = [&](std::size_t n, unsigned active, float (&d2)[4][PACKET], unsigned (&lanes)[4]) {
         const TreeAccess::Node& node = nodes[n];
         const FacePlanes* planes = m_planes ? m_planes->get(n, m_tree, m_data, m_stride) : nullptr;
-        int needed = 0; // bit k: some point needs child k
-        for (int k = 0; k < node.count; ++k) {
+        for (int k = 0; k < 4; ++k) {
             F8 sum = zero;
             for (int j = 0; j < 3; ++j) {
                 const F8 d = max(max(F8::splat(node.lo[j][k]) - p_hi[j], p_lo[j] - F8::splat(node.hi[j][k])), zero);
@@ -326,10 +327,13 @@ void NearestSearch::find_packet(const Vec3* points, int count, const double* dis
             }
             sum.store(d2[k]);
             lanes[k] = active & static_cast<unsigned>((sum <= limit).bits());
-            needed |= lanes[k] != 0 ? 1 << k : 0;
         }
-        // The node's faces, each for the points that need it; then its child nodes, pushed
-        // farther first by the keys of the first point that needs each.
+        return ((lanes[0] != 0 ? 1 : 0) | (lanes[1] != 0 ? 2 : 0) | (lanes[2] != 0 ? 4 : 0) | (lanes[3] != 0 ? 8 : 0)) &
+               ((1 << node.count) - 1);
+    };
+    // The faces among `needed` children of `node`, each for the points that need it.
+    const auto test_faces = [&](const TreeAccess::Node& node, int needed, const float (&d2)[4][PACKET],
+                                const unsigned (&lanes)[4]) {
         for (int m = needed & node.face_mask; m != 0; m &= m - 1) {
             const int k = __builtin_ctz(static_cast<unsigned>(m));
             const auto slot = static_cast<std::size_t>(-1 - node.child[k]);
@@ -339,7 +343,7 @@ void NearestSearch::find_packet(const Vec3* points, int count, const double* dis
             bool improved = false;
             for (unsigned l = lanes[k]; l != 0; l &= l - 1) {
                 const int q = __builtin_ctz(l);
-                if (d2[k][q] > threshold[q])
+                if (d2[k][q] > threshold[q] || f == measured[q])
                     continue;
                 const TrianglePoint t = closest_point_on_triangle(points[q], a, b, c);
                 const double dq = (t.point - points[q]).squaredNorm();
@@ -355,22 +359,30 @@ void NearestSearch::find_packet(const Vec3* points, int count, const double* dis
             if (improved)
                 limit = F8::load(threshold);
         }
-        for (int m = needed & ~node.face_mask; m != 0;) {
-            int far = __builtin_ctz(static_cast<unsigned>(m));
-            float far_d2 = d2[far][__builtin_ctz(lanes[far])];
-            for (int rest = m & (m - 1); rest != 0; rest &= rest - 1) {
-                const int k = __builtin_ctz(static_cast<unsigned>(rest));
-                const float key = d2[k][__builtin_ctz(lanes[k])];
-                if (key > far_d2) {
-                    far = k;
-                    far_d2 = key;
-                }
+    };
+    while (top > 0) {
+        --top;
+        const unsigned active = stack_lanes[top];
+        const auto n = static_cast<std::size_t>(stack[top]);
+        const TreeAccess::Node& node = nodes[n];
+        float d2[4][PACKET];
+        unsigned lanes[4];
+        const int needed = bound_children(n, active, d2, lanes);
+        test_faces(node, needed, d2, lanes);
+        // The child nodes: those of faces only (the last level) at once, the others onto the
+        // stack, in any order (it matters little for the same reason).
+        for (int m = needed & ~node.face_mask; m != 0; m &= m - 1) {
+            const int k = __builtin_ctz(static_cast<unsigned>(m));
+            const auto c = static_cast<std::size_t>(node.child[k]);
+            if (nodes[c].face_mask == (1 << nodes[c].count) - 1) {
+                float child_d2[4][PACKET];
+                unsigned child_lanes[4];
+                const int child_needed = bound_children(c, lanes[k], child_d2, child_lanes);
+                test_faces(nodes[c], child_needed, child_d2, child_lanes);
+                continue;
             }
-            stack[top] = node.child[far];
-            stack_lanes[top] = lanes[far];
-            F8::load(d2[far]).store(stack_d2[top]);
-            ++top;
-            m &= ~(1 << far);
+            stack[top] = node.child[k];
+            stack_lanes[top++] = lanes[k];
         }
     }
     for (int q = 0; q < count; ++q) {

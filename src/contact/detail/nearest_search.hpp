@@ -82,7 +82,8 @@ public:
     ///                            for none; a wrong one costs a second search, not the answer
     /// @param[in] hint_face       a face of `faces` likely near `point` (e.g. the previous
     ///                            query's answer), −1 for none
-    /// @param[in] faces           the surface's faces (the tree's build() argument), for the hint
+    /// @param[in] faces           the surface's faces (the tree's build() argument: the walk does
+    ///                            not measure the hint face again), for the hint
     NearestPoint find(const Vec3& point, double distance_bound = std::numeric_limits<double>::infinity(),
                       Index hint_face = -1, const Tris* faces = nullptr) const;
 

@@ -16,17 +16,19 @@ namespace coro::detail {
 
 /// `x` rounded to a float no greater (down) or no smaller (up): the nearest float, then a step
 /// of at least one ulp outward (a few ulps looser than needed). A value above the float range
-/// rounds down to the largest float, one below it up to the lowest (the step from ±∞ would give
-/// NaN, which min/max drop).
+/// rounds down to the largest float, one below it up to the lowest (the step from ±∞ gives NaN,
+/// which fails the comparison). A comparison, not std::fmin/fmax: those are library calls.
 inline float float_down(double x)
 {
     const float f = static_cast<float>(x);
-    return std::fmin(f - (std::abs(f) * 0x1p-23f + 0x1p-126f), std::numeric_limits<float>::max());
+    const float down = f - (std::abs(f) * 0x1p-23f + 0x1p-126f);
+    return down < std::numeric_limits<float>::max() ? down : std::numeric_limits<float>::max();
 }
 inline float float_up(double x)
 {
     const float f = static_cast<float>(x);
-    return std::fmax(f + (std::abs(f) * 0x1p-23f + 0x1p-126f), -std::numeric_limits<float>::max());
+    const float up = f + (std::abs(f) * 0x1p-23f + 0x1p-126f);
+    return up > -std::numeric_limits<float>::max() ? up : -std::numeric_limits<float>::max();
 }
 /// A float threshold no smaller than `x` ≥ 0, with a relative margin of 2⁻¹⁸ (covers the
 /// rounding of the single precision lower bounds compared against it); +∞ from 10³⁸ on.
@@ -103,28 +105,6 @@ inline void push_by_key(const TreeAccess::Node& node, int lanes, const float* ke
         stack[top] = node.child[far];
         stack_keys[top++] = keys[far];
         m &= ~(1 << far);
-    }
-}
-
-/// Pushes the child nodes among `lanes` of `node` (face lanes are skipped), each with its key,
-/// the smallest key last, so that the nearest is popped first (cheaper than push_by_key, for
-/// walks whose answer does not depend on the order).
-inline void push_nearest_last(const TreeAccess::Node& node, int lanes, const float* keys, Index* stack,
-                              float* stack_keys, int& top)
-{
-    const int first = top;
-    for (int m = lanes & ~node.face_mask; m != 0; m &= m - 1) {
-        const int k = __builtin_ctz(static_cast<unsigned>(m));
-        stack[top] = node.child[k];
-        stack_keys[top++] = keys[k];
-    }
-    int nearest = top - 1;
-    for (int i = first; i < top - 1; ++i)
-        if (stack_keys[i] < stack_keys[nearest])
-            nearest = i;
-    if (nearest >= first) {
-        std::swap(stack[nearest], stack[top - 1]);
-        std::swap(stack_keys[nearest], stack_keys[top - 1]);
     }
 }
 
