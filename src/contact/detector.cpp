@@ -183,6 +183,8 @@ DetectionScratch::~DetectionScratch() = default;
 DetectionScratch::DetectionScratch(DetectionScratch&&) noexcept = default;
 DetectionScratch& DetectionScratch::operator=(DetectionScratch&&) noexcept = default;
 
+const std::vector<std::pair<Index, Index>>& DetectionScratch::overlapping_surfaces() const { return m_state->pairs; }
+
 std::vector<ContactPoint> detect_contacts(const std::vector<ContactSurface>& surfaces,
                                           const DetectionSettings& settings, DetectionStats* stats)
 {

@@ -61,31 +61,20 @@ void update_contact_surfaces(const std::vector<Body>& bodies, std::vector<Contac
 void contact_components(const std::vector<ContactSurface>& surfaces, Index num_bodies,
                         std::vector<Index>& component_of_body)
 {
-    ComponentScratch scratch;
-    contact_components(surfaces, num_bodies, scratch, component_of_body);
-}
-
-void contact_components(const std::vector<ContactSurface>& surfaces, Index num_bodies, ComponentScratch& scratch,
-                        std::vector<Index>& component_of_body)
-{
-    std::vector<Aabb>& boxes = scratch.boxes;
-    boxes.clear();
+    std::vector<Aabb> boxes;
     for (Index b = 0; b < num_bodies; ++b)
         boxes.push_back(surfaces[static_cast<std::size_t>(b)].tree.bounds());
-    contact_components_of_boxes(boxes, scratch, component_of_body);
+    contact_components(boxes, component_of_body);
 }
 
 void contact_components(const std::vector<Aabb>& body_boxes, std::vector<Index>& component_of_body)
 {
-    ComponentScratch scratch;
-    contact_components_of_boxes(body_boxes, scratch, component_of_body);
+    contact_components(overlapping_pairs(body_boxes), static_cast<Index>(body_boxes.size()), component_of_body);
 }
 
-void contact_components_of_boxes(const std::vector<Aabb>& body_boxes, ComponentScratch& scratch,
-                                 std::vector<Index>& component_of_body)
+void contact_components(const std::vector<std::pair<Index, Index>>& overlapping, Index num_bodies,
+                        std::vector<Index>& component_of_body)
 {
-    const auto num_bodies = static_cast<Index>(body_boxes.size());
-    overlapping_pairs(body_boxes, scratch.pairs, scratch.sweep_order);
     // Union-find with the lower body as root, so a component's root is its first body.
     std::vector<Index>& root = component_of_body;
     root.resize(static_cast<std::size_t>(num_bodies));
@@ -96,7 +85,9 @@ void contact_components_of_boxes(const std::vector<Aabb>& body_boxes, ComponentS
             b = root[static_cast<std::size_t>(b)] = root[static_cast<std::size_t>(root[static_cast<std::size_t>(b)])];
         return b;
     };
-    for (const auto& [i, j] : scratch.pairs) {
+    for (const auto& [i, j] : overlapping) {
+        if (std::max(i, j) >= num_bodies)
+            continue;
         const Index a = find(i), c = find(j);
         root[static_cast<std::size_t>(std::max(a, c))] = std::min(a, c);
     }

@@ -166,7 +166,7 @@ void Simulation::detect(RunSummary& summary)
         std::merge(m_surface_contacts.begin(), m_surface_contacts.end(), m_plane_contacts.begin(),
                    m_plane_contacts.end(), m_scene.contacts.begin(), contact_order);
     }
-    contact_components(m_scene.surfaces, num_bodies, m_component_scratch, m_components);
+    contact_components(m_detection.overlapping_surfaces(), num_bodies, m_components);
     m_system.matrix().set_components(m_components);
     m_response.compute(m_scene.bodies, m_scene.surfaces, m_scene.contacts, m_spec.contact, m_spec.simulation.dt,
                        m_system.matrix());

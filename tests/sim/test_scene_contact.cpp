@@ -1,5 +1,5 @@
-// The scene's components: bodies joined through overlapping boxes, against a brute-force
-// search over all pairs of boxes.
+// The scene's components: bodies joined through overlapping boxes, from the boxes and from a
+// detection's broad phase, against a brute-force search over all pairs of boxes.
 #include <corocontact/contact/contact_surface.hpp>
 #include <corocontact/sim/scene_contact.hpp>
 
@@ -72,5 +72,16 @@ TEST(ContactComponents, JoinBodiesThroughOverlappingBoxesNumberedByFirstBody)
         std::vector<Index> components;
         contact_components(surfaces, num_bodies, components);
         EXPECT_EQ(components, expected) << "trial " << trial;
+
+        // The same from the broad phase of a detection (the obstacle's pairs included there),
+        // as a time step takes them.
+        DetectionScratch scratch;
+        std::vector<ContactPoint> points;
+        detect_contacts(surfaces, DetectionSettings{}, scratch, points);
+        ASSERT_FALSE(scratch.overlapping_surfaces().empty());
+        EXPECT_EQ(scratch.overlapping_surfaces().back().second, num_bodies) << "the obstacle meets every body";
+        std::vector<Index> from_detection;
+        contact_components(scratch.overlapping_surfaces(), num_bodies, from_detection);
+        EXPECT_EQ(from_detection, expected) << "trial " << trial;
     }
 }

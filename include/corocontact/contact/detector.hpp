@@ -97,6 +97,10 @@ public:
     DetectionScratch(DetectionScratch&&) noexcept;
     DetectionScratch& operator=(DetectionScratch&&) noexcept;
 
+    /// The broad phase of the last detection with this scratch: the pairs (a, b), a < b, of
+    /// surfaces whose boxes overlapped, sorted; empty before the first.
+    const std::vector<std::pair<Index, Index>>& overlapping_surfaces() const;
+
 private:
     friend struct detail::ScratchAccess;
     std::unique_ptr<detail::DetectionState> m_state;

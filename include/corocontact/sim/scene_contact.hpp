@@ -43,22 +43,14 @@ void contact_components(const std::vector<ContactSurface>& surfaces, Index num_b
 /// @param[in] body_boxes  #bodies
 /// @param[out] component_of_body  #bodies
 void contact_components(const std::vector<Aabb>& body_boxes, std::vector<Index>& component_of_body);
-
-/// The working memory of contact_components(), kept from step to step: a time step passing the
-/// same one allocates nothing once it has grown to the scene.
-struct ComponentScratch {
-    std::vector<Aabb> boxes;                    ///< per body
-    std::vector<Index> sweep_order;             ///< the broad phase's working memory
-    std::vector<std::pair<Index, Index>> pairs; ///< bodies whose boxes overlap
-};
-
-/// contact_components() with the working memory `scratch`.
-void contact_components(const std::vector<ContactSurface>& surfaces, Index num_bodies, ComponentScratch& scratch,
+/// The same from the broad phase a detection has done already
+/// (DetectionScratch::overlapping_surfaces()): a time step reuses its pairs instead of sweeping
+/// the boxes again, and allocates nothing once `component_of_body` has its size.
+/// @param[in] overlapping  pairs (a, b), a < b, of surfaces whose boxes overlap; a pair with an
+///                         obstacle (b ≥ num_bodies) joins nothing
+/// @param[out] component_of_body  #num_bodies
+void contact_components(const std::vector<std::pair<Index, Index>>& overlapping, Index num_bodies,
                         std::vector<Index>& component_of_body);
-/// contact_components() of the bodies' boxes with the working memory `scratch` (which may hold
-/// `body_boxes` itself).
-void contact_components_of_boxes(const std::vector<Aabb>& body_boxes, ComponentScratch& scratch,
-                                 std::vector<Index>& component_of_body);
 
 /// Detection settings from the case's [contact] table.
 DetectionSettings detection_settings(const ContactSettings& contact);

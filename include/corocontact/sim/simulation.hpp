@@ -179,7 +179,6 @@ private:
     DetectionScratch m_detection;          // detect_contacts' working memory, kept from step to step
     std::vector<ContactPoint> m_surface_contacts, m_plane_contacts; // a detection's, before their merge
     PlaneContactScratch m_plane_scratch;                           // detect_plane_contacts' working memory
-    ComponentScratch m_component_scratch;                          // contact_components' working memory
     DivergenceCheck m_divergence;          // run after every step
     Index m_step = 0;                      // steps done
     RunSummary m_totals;                   // counters so far; *_mean fields hold sums
