@@ -10,7 +10,6 @@
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
-#include <tbb/parallel_invoke.h>
 
 #include <algorithm>
 #include <memory>
@@ -139,11 +138,9 @@ void detect_pairs(const std::vector<ContactSurface>& surfaces, const DetectionSe
         return;
     }
 
-    // The mid phase and the face pairs of the groups need only the broad phase: one parallel
-    // phase for both.
-    tbb::parallel_invoke([&] { pair_candidates(surfaces, settings.mode, state); },
-                         [&] { detail::overlapping_slot_pairs(surfaces, state.pairs, state.slot_pairs); });
-    const std::vector<PairCandidates>& candidates = state.candidates.items();
+    // Which pairs are grouped depends on their candidates: the mid phase comes first.
+    const std::vector<PairCandidates>& candidates = pair_candidates(surfaces, settings.mode, state);
+    detail::overlapping_slot_pairs(surfaces, state.pairs, candidates, state.grouping, state.slot_pairs);
     // Each pair's answers are taken in its own task, as they come; with depth searches to do,
     // its blocks are nested tasks.
     DetectionPass pass(surfaces, candidates, settings.contact_data, state);

@@ -147,6 +147,30 @@ TEST(DetectContacts, SharedAnswersChangeNothingButTheWork)
     EXPECT_EQ(s2.by_neighbour, 0);
 }
 
+TEST(DetectContacts, PairsWithFewCandidatesTestEveryCandidate)
+{
+    // Two balls that barely touch have a handful of candidates: each is tested (grouping them
+    // would cost more than the tests it saves). Pushed deep into each other they have hundreds,
+    // and most take a neighbour's answer. Both give the brute-force answers.
+    for (const double gap : {1.97, 1.2}) {
+        std::vector<ContactSurface> surfaces;
+        surfaces.push_back(deformed_ball(Vec3(0, 0, 0), 1.0, 12, 0.06, "a"));
+        surfaces.push_back(deformed_ball(Vec3(gap, 0.05, -0.03), 1.0, 12, 0.06, "b"));
+        DetectionStats stats;
+        const auto points = detect_contacts(surfaces, DetectionSettings{}, &stats);
+        EXPECT_EQ(keys(points), brute_force_contacts(surfaces)) << "gap " << gap;
+        EXPECT_EQ(stats.pairs, 1);
+        if (gap > 1.5) {
+            ASSERT_GT(stats.inside, 0);
+            ASSERT_LT(stats.candidate_vertices, 64);
+            EXPECT_EQ(stats.by_neighbour, 0);
+        } else {
+            ASSERT_GE(stats.candidate_vertices, 64);
+            EXPECT_GT(stats.by_neighbour, stats.candidate_vertices / 4);
+        }
+    }
+}
+
 TEST(DetectContacts, DepthNormalAndFaceAreTheBruteForceNearestPointOfEveryContact)
 {
     // Every inside vertex's nearest point, against a scan of every face of the other surface

@@ -80,8 +80,9 @@ struct DetectionSettings {
     /// Exact mode: the candidates of a pair are grouped by edges of their surface that meet no
     /// face of the other surface; the first vertex of each group is tested and the others take
     /// its answer, the same as their own tests would give. Where the other surface is not
-    /// closed, every candidate is tested. False: every candidate is tested (for measurements
-    /// and cross-checks).
+    /// closed, or a pair has fewer than 64 candidates (where testing each costs less than
+    /// finding the groups), every candidate is tested. False: every candidate is tested (for
+    /// measurements and cross-checks).
     bool share_answers = true;
 };
 

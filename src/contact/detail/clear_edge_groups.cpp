@@ -59,6 +59,17 @@ struct PairedReset {
 
 } // namespace
 
+void check_edges_and_tree(const ContactSurface& surface)
+{
+    CORO_CHECK(surface.edges.start.size() == static_cast<std::size_t>(surface.vertices.rows()) + 1 &&
+                   surface.edges.tree_slots.size() == surface.edges.vertex.size() &&
+                   surface.tree.num_faces() == surface.faces.rows(),
+               InputError,
+               "surface '" << surface.name
+                           << "': its edges and tree were not built with it (make contact surfaces with "
+                              "ContactSurface::from_body or from_embedding)");
+}
+
 Index clear_edge_groups(const ContactSurface& surface, const ContactSurface& other, const SlotPairs& pairs,
                         PairColumn column, const std::vector<Index>& candidates, GroupScratch& scratch,
                         std::vector<Index>& group, std::vector<Index>& firsts, std::vector<double>* path)
@@ -66,13 +77,6 @@ Index clear_edge_groups(const ContactSurface& surface, const ContactSurface& oth
     const std::size_t n = candidates.size();
     const auto face_count = static_cast<std::size_t>(surface.faces.rows());
     const auto vertex_count = static_cast<std::size_t>(surface.vertices.rows());
-    CORO_CHECK(surface.edges.start.size() == vertex_count + 1 &&
-                   surface.edges.tree_slots.size() == surface.edges.vertex.size() &&
-                   surface.tree.num_faces() == surface.faces.rows(),
-               InputError,
-               "surface '" << surface.name
-                           << "': its edges and tree were not built with it (make contact surfaces with "
-                              "ContactSurface::from_body or from_embedding)");
 
     // Every array sized before any entry is set, so that a failed allocation leaves the
     // invariants of the scratch intact.

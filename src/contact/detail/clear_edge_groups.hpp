@@ -29,12 +29,17 @@ struct GroupScratch {
     std::vector<double> length_to; // per vertex, valid where grouped
 };
 
+/// Throws InputError unless `surface`'s edges and tree were built with its faces and vertices,
+/// as clear_edge_groups() requires of the surface it groups.
+void check_edges_and_tree(const ContactSurface& surface);
+
 /// The groups of candidate vertices of `surface`: vertices joined by a path of edges of
 /// `surface` that meet no face of `other` are in one group, so for a closed `other` all inside
 /// it or all outside. An edge is clear when one of its faces is in no pair of `pairs`, or when
 /// each face of `other` paired with one of its faces whose box meets the edge's is shown to miss
 /// the edge by signs beyond their rounding (segment_triangle.hpp). A vertex on `other`'s surface
-/// meets a face with every edge, so it is a group of its own.
+/// meets a face with every edge, so it is a group of its own. `surface` must pass
+/// check_edges_and_tree().
 /// @param[in] pairs       overlapping_slots() of the two surfaces' trees over a region that
 ///                        holds every candidate, `surface`'s in column `column`
 /// @param[in] candidates  distinct vertices of `surface` in that region

@@ -19,17 +19,53 @@ namespace {
 // Tested vertices per task.
 constexpr std::size_t TEST_BLOCK = 256;
 
+// For each entry of `candidates` (both directions of each pair, ordered by (body, other)), the
+// index of its pair: those with body < other come in the order of their pairs, the other
+// direction takes the index of its reverse.
+void pair_index_of(const std::vector<PairCandidates>& candidates, std::vector<std::size_t>& pair_of)
+{
+    pair_of.resize(candidates.size());
+    std::size_t lower = 0;
+    for (std::size_t k = 0; k < candidates.size(); ++k)
+        if (candidates[k].body < candidates[k].other)
+            pair_of[k] = lower++;
+    for (std::size_t k = 0; k < candidates.size(); ++k) {
+        const PairCandidates& pair = candidates[k];
+        if (pair.body < pair.other)
+            continue;
+        const auto reverse = std::lower_bound(candidates.begin(), candidates.end(), pair,
+                                              [](const PairCandidates& x, const PairCandidates& y) {
+                                                  return std::tie(x.body, x.other) < std::tie(y.other, y.body);
+                                              });
+        CORO_ASSERT(reverse != candidates.end() && reverse->body == pair.other && reverse->other == pair.body);
+        pair_of[k] = pair_of[static_cast<std::size_t>(reverse - candidates.begin())];
+    }
+}
+
 } // namespace
 
 void overlapping_slot_pairs(const std::vector<ContactSurface>& surfaces,
-                            const std::vector<std::pair<Index, Index>>& pairs, PairBuffers<PairSlots>& slot_pairs)
+                            const std::vector<std::pair<Index, Index>>& pairs,
+                            const std::vector<PairCandidates>& candidates, GroupingScratch& scratch,
+                            PairBuffers<PairSlots>& slot_pairs)
 {
+    std::vector<std::size_t>& pair_of = scratch.slot_pairs_of;
+    pair_index_of(candidates, pair_of);
+    std::vector<std::size_t>& count = scratch.pair_candidates;
+    count.assign(pairs.size(), 0);
+    for (std::size_t k = 0; k < candidates.size(); ++k)
+        count[pair_of[k]] += candidates[k].vertices.size();
     std::vector<PairSlots>& out = slot_pairs.assign(pairs);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, pairs.size(), 1), [&](const tbb::blocked_range<std::size_t>& r) {
         for (std::size_t j = r.begin(); j < r.end(); ++j) {
             const ContactSurface& a = surfaces[static_cast<std::size_t>(pairs[j].first)];
             const ContactSurface& b = surfaces[static_cast<std::size_t>(pairs[j].second)];
-            if (a.closed || b.closed)
+            if (a.closed || b.closed) { // for every pair, not only those grouped
+                check_edges_and_tree(a);
+                check_edges_and_tree(b);
+            }
+            out[j].grouped = (a.closed || b.closed) && count[j] >= MIN_GROUPED_CANDIDATES;
+            if (out[j].grouped)
                 overlapping_slots(a.tree, b.tree, a.tree.bounds().intersection(b.tree.bounds()), out[j].pairs,
                                   out[j].walk);
             else
@@ -44,27 +80,10 @@ void grouped_inside_tests(const std::vector<ContactSurface>& surfaces, const std
                           const std::function<void(std::size_t pair, const GroupedAnswers& answers)>& use)
 {
     const std::size_t pairs = candidates.size();
-    // The face pairs of each k: candidates holds (a, b) and (b, a), ordered by (body, other), so
-    // those with body < other come in the order of their pairs; the other direction takes the
-    // slot pairs of its reverse, columns swapped.
+    // The face pairs of each k: those of its pair, columns swapped for body > other.
     std::vector<std::size_t>& pair_of = scratch.slot_pairs_of;
-    pair_of.resize(pairs);
-    std::size_t lower = 0;
-    for (std::size_t k = 0; k < pairs; ++k)
-        if (candidates[k].body < candidates[k].other)
-            pair_of[k] = lower++;
-    CORO_ASSERT(lower == slot_pairs.size());
-    for (std::size_t k = 0; k < pairs; ++k) {
-        const PairCandidates& pair = candidates[k];
-        if (pair.body < pair.other)
-            continue;
-        const auto reverse = std::lower_bound(candidates.begin(), candidates.end(), pair,
-                                              [](const PairCandidates& x, const PairCandidates& y) {
-                                                  return std::tie(x.body, x.other) < std::tie(y.other, y.body);
-                                              });
-        CORO_ASSERT(reverse != candidates.end() && reverse->body == pair.other && reverse->other == pair.body);
-        pair_of[k] = pair_of[static_cast<std::size_t>(reverse - candidates.begin())];
-    }
+    pair_index_of(candidates, pair_of);
+    CORO_ASSERT(std::all_of(pair_of.begin(), pair_of.end(), [&](std::size_t j) { return j < slot_pairs.size(); }));
     // Per pair, in one task: the groups, the tests of their first vertices (blocks of them as
     // nested tasks when there are many) and their use, where the rest of each group take them.
     // The answers of a pair have their own buffers: while a task waits for its nested tasks, its
@@ -85,7 +104,7 @@ void grouped_inside_tests(const std::vector<ContactSurface>& surfaces, const std
             const std::size_t n = pair.vertices.size();
             if (!distance_bounds)
                 answers.path.clear();
-            if (other.closed) {
+            if (other.closed && slot_pairs[pair_of[k]].grouped) {
                 clear_edge_groups(body, other, slot_pairs[pair_of[k]].pairs,
                                   pair.body < pair.other ? PairColumn::FIRST : PairColumn::SECOND, pair.vertices,
                                   scratch.groups.local(), group, tested, distance_bounds ? &answers.path : nullptr);
