@@ -60,11 +60,12 @@ void overlapping_slot_pairs(const std::vector<ContactSurface>& surfaces,
         for (std::size_t j = r.begin(); j < r.end(); ++j) {
             const ContactSurface& a = surfaces[static_cast<std::size_t>(pairs[j].first)];
             const ContactSurface& b = surfaces[static_cast<std::size_t>(pairs[j].second)];
-            if (a.closed || b.closed) { // for every pair, not only those grouped
+            const bool closed = a.closed || b.closed;
+            if (closed) { // for every pair, not only those grouped
                 check_edges_and_tree(a);
                 check_edges_and_tree(b);
             }
-            out[j].grouped = (a.closed || b.closed) && count[j] >= MIN_GROUPED_CANDIDATES;
+            out[j].grouped = closed && count[j] >= MIN_GROUPED_CANDIDATES;
             if (out[j].grouped)
                 overlapping_slots(a.tree, b.tree, a.tree.bounds().intersection(b.tree.bounds()), out[j].pairs,
                                   out[j].walk);
@@ -80,10 +81,10 @@ void grouped_inside_tests(const std::vector<ContactSurface>& surfaces, const std
                           const std::function<void(std::size_t pair, const GroupedAnswers& answers)>& use)
 {
     const std::size_t pairs = candidates.size();
-    // The face pairs of each k: those of its pair, columns swapped for body > other.
-    std::vector<std::size_t>& pair_of = scratch.slot_pairs_of;
-    pair_index_of(candidates, pair_of);
-    CORO_ASSERT(std::all_of(pair_of.begin(), pair_of.end(), [&](std::size_t j) { return j < slot_pairs.size(); }));
+    // The face pairs of each k: those of its pair (as overlapping_slot_pairs() indexed them),
+    // columns swapped for body > other.
+    const std::vector<std::size_t>& pair_of = scratch.slot_pairs_of;
+    CORO_ASSERT(pair_of.size() == pairs);
     // Per pair, in one task: the groups, the tests of their first vertices (blocks of them as
     // nested tasks when there are many) and their use, where the rest of each group take them.
     // The answers of a pair have their own buffers: while a task waits for its nested tasks, its

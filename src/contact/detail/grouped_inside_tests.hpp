@@ -47,7 +47,7 @@ struct GroupingScratch {
     tbb::enumerable_thread_specific<GroupScratch> groups; ///< per thread, for clear_edge_groups()
     std::vector<std::pair<Index, Index>> keys;            ///< per pair of candidates: (body, other)
     PairBuffers<GroupedAnswers> answers;                  ///< per pair of candidates
-    std::vector<std::size_t> slot_pairs_of;               ///< per pair of candidates
+    std::vector<std::size_t> slot_pairs_of;               ///< per pair of candidates: its pair's index
     std::vector<std::size_t> pair_candidates;             ///< per pair: candidates of both directions
 };
 
@@ -68,7 +68,7 @@ void overlapping_slot_pairs(const std::vector<ContactSurface>& surfaces,
 /// its answer, with shared_distance_bound() as theirs. Else every candidate is tested. The tests
 /// of a pair with many groups run in nested tasks; the answers do not depend on the scheduling.
 /// @param[in] slot_pairs  overlapping_slot_pairs() of the pairs (body < other) of `candidates`,
-///                        in their order
+///                        in their order, called with the same `candidates` and `scratch`
 void grouped_inside_tests(const std::vector<ContactSurface>& surfaces, const std::vector<PairCandidates>& candidates,
                           const std::vector<PairSlots>& slot_pairs, const AxisRayTolerances& tolerances,
                           bool distance_bounds, GroupingScratch& scratch,
