@@ -92,22 +92,23 @@ void evaluate_contacts(const std::vector<ContactSurface>& surfaces, const std::v
 
 void ContactResponse::compute(const std::vector<Body>& bodies, const std::vector<ContactSurface>& surfaces,
                               const std::vector<ContactPoint>& contacts, const ContactSettings& settings, double dt,
-                              SceneMatrix& matrix)
+                              SceneMatrix& matrix, std::vector<VecX>& forces)
 {
     evaluate_contacts(surfaces, contacts, BodyNodes(bodies), settings, dt, m_records);
     apply(
         m_records, bodies, [](Index surface) { return surface; },
-        [&](Index surface, Index node) { return matrix.offset(surface) + node; }, nullptr, matrix);
+        [&](Index surface, Index node) { return matrix.offset(surface) + node; }, nullptr, matrix, forces);
 }
 
 void ContactResponse::apply(const ContactRecords& records, const std::vector<Body>& bodies,
                             FunctionRef<Index(Index surface)> local_body,
                             FunctionRef<Index(Index surface, Index node)> column,
-                            const std::vector<Index>* column_order, SceneMatrix& matrix)
+                            const std::vector<Index>* column_order, SceneMatrix& matrix,
+                            std::vector<VecX>& forces)
 {
-    m_forces.resize(bodies.size());
+    forces.resize(bodies.size());
     for (std::size_t b = 0; b < bodies.size(); ++b)
-        m_forces[b].setZero(3 * bodies[b].num_vertices());
+        forces[b].setZero(3 * bodies[b].num_vertices());
 
     // Blocks: every pair of shares of a contact whose row is here, contact after contact.
     const Index n_contacts = records.size();
@@ -150,7 +151,7 @@ void ContactResponse::apply(const ContactRecords& records, const std::vector<Bod
         const ContactShare& share = records.shares[s];
         const Index body = local_body(share.surface);
         if (body >= 0)
-            m_forces[at(body)].segment<3>(3 * share.node) += m_share_forces[s];
+            forces[at(body)].segment<3>(3 * share.node) += m_share_forces[s];
     }
     coupling.finish(matrix.chunks(), column_order);
 }

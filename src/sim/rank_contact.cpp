@@ -488,9 +488,8 @@ RankContact::Counts RankContact::detect(Scene& scene, const ContactSettings& set
             const auto ghost = std::lower_bound(ghosts.begin(), ghosts.end(), std::make_pair(body, node));
             return rows + static_cast<Index>(ghost - ghosts.begin());
         },
-        &column_order, matrix);
+        &column_order, matrix, scene.contact_forces);
     exchange.set_halo(std::move(halo));
-    scene.contact_forces = response.forces();
     return counts;
 }
 

@@ -169,8 +169,7 @@ void Simulation::detect(RunSummary& summary)
     contact_components(m_detection.overlapping_surfaces(), num_bodies, m_components);
     m_system.matrix().set_components(m_components);
     m_response.compute(m_scene.bodies, m_scene.surfaces, m_scene.contacts, m_spec.contact, m_spec.simulation.dt,
-                       m_system.matrix());
-    m_scene.contact_forces = m_response.forces();
+                       m_system.matrix(), m_scene.contact_forces);
     ++summary.detections;
     summary.contacts_mean += static_cast<double>(m_scene.contacts.size());
     for (const ContactPoint& point : m_scene.contacts)
@@ -193,8 +192,7 @@ void Simulation::update_contact_response()
     if (!contact_applies(m_spec))
         return;
     m_response.compute(m_scene.bodies, m_scene.surfaces, m_scene.contacts, m_spec.contact, m_spec.simulation.dt,
-                       m_system.matrix());
-    m_scene.contact_forces = m_response.forces();
+                       m_system.matrix(), m_scene.contact_forces);
 }
 
 void Simulation::dynamic_step()
@@ -208,7 +206,7 @@ void Simulation::dynamic_step()
             m_system.element_loop(dt);
         }
         ScopedTimer timer(phases.assembly);
-        m_system.assemble(dt, m_spec.simulation.gravity, m_spec.contact.enabled ? m_response.forces() : no_forces);
+        m_system.assemble(dt, m_spec.simulation.gravity, m_spec.contact.enabled ? m_scene.contact_forces : no_forces);
     });
     ScopedTimer timer(phases.solve);
     const PreconditionerTimes before = m_system.preconditioner_times();

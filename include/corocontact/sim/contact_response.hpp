@@ -105,8 +105,8 @@ void evaluate_contacts(const std::vector<ContactSurface>& surfaces, const std::v
                        const ContactNodes& nodes, const ContactSettings& settings, double dt,
                        ContactRecords& records);
 
-/// What contact adds to one implicit Euler step of the scene: explicit forces per body, and
-/// the coupling blocks of the scene matrix.
+/// What contact adds to one implicit Euler step of the scene: explicit forces per body (into
+/// the caller's vectors, the scene's own), and the coupling blocks of the scene matrix.
 class ContactResponse {
 public:
     /// Builds the response of every contact point, in parallel over the contacts; every
@@ -119,32 +119,30 @@ public:
     /// @param[in] dt        the step h [s]
     /// @param[in,out] matrix  the scene matrix whose coupling() is refilled and finished;
     ///                        blocks in rows or columns of fixed nodes are left out
+    /// @param[out] forces     per body, #3V: explicit contact forces at the step start
+    ///                        (penalty) [N]; vectors already of the right size are reused
     void compute(const std::vector<Body>& bodies, const std::vector<ContactSurface>& surfaces,
                  const std::vector<ContactPoint>& contacts, const ContactSettings& settings, double dt,
-                 SceneMatrix& matrix);
+                 SceneMatrix& matrix, std::vector<VecX>& forces);
 
     /// Adds evaluated contacts to this process's rows, contact after contact in the records'
     /// order: the forces on the nodes of its bodies, and the coupling blocks of their rows
     /// (compute() is evaluate_contacts() and this for one process).
     /// @param[in] records     the contacts, in the order one process holding every body adds them
-    /// @param[in] bodies      this process's bodies (forces() is sized by them)
+    /// @param[in] bodies      this process's bodies (`forces` is sized by them)
     /// @param[in] local_body  the index in `bodies` of a share's surface, or −1 if another
     ///                        process holds it (its rows are left out)
     /// @param[in] column      the column of a share's node in `matrix`: a row of a body here, or
     ///                        a ghost row after them (see scene_exchange.hpp)
     /// @param[in] column_order  null, or the order of the columns (CouplingBlocks::finish)
     /// @param[in,out] matrix  its coupling() is refilled and finished
+    /// @param[out] forces     per body here, #3V: the forces on its nodes [N]
     void apply(const ContactRecords& records, const std::vector<Body>& bodies,
                FunctionRef<Index(Index surface)> local_body, FunctionRef<Index(Index surface, Index node)> column,
-               const std::vector<Index>* column_order, SceneMatrix& matrix);
-
-    /// Per body, #3V: explicit contact forces at the step start (penalty) [N]; empty before
-    /// the first compute().
-    const std::vector<VecX>& forces() const { return m_forces; }
+               const std::vector<Index>* column_order, SceneMatrix& matrix, std::vector<VecX>& forces);
 
 private:
     ContactRecords m_records;
-    std::vector<VecX> m_forces;
     std::vector<Index> m_block_offsets; // #contacts+1 into the coupling entries
     std::vector<Vec3> m_share_forces;   // force on each share's node, of the shares here [N]
 };
