@@ -6,31 +6,40 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 
 namespace coro {
 
 namespace {
 
-/// Bit k set unless every point of `box` lies above plane k (k < 32; later planes are always
-/// set). Above means by more than the rounding of a vertex's height, so a vertex in the box
-/// whose computed height is negative never belongs to a plane whose bit is clear.
-std::uint32_t planes_near(const Aabb& box, const std::vector<PlaneObstacle>& planes)
+/// Planes after the first MASKED_PLANES are tested vertex by vertex for every body.
+constexpr std::size_t MASKED_PLANES = 32;
+/// A box lies above a plane when its lowest corner is higher than this times the magnitudes in
+/// the height's computation: far beyond the rounding of any vertex's height (a few ulps).
+constexpr double HEIGHT_ROUNDING = 1e-12;
+
+/// Bit k (k < MASKED_PLANES) set unless every vertex lies above plane k by more than the
+/// rounding of its height, so that no vertex whose computed height is negative is left out
+/// where the bit is clear. A non-finite vertex sets every bit.
+std::uint32_t planes_near(CRef<Positions> vertices, const std::vector<PlaneObstacle>& planes)
 {
+    // Every vertex row, not the tree's box: an embedded surface may keep vertices no face uses.
+    if (vertices.rows() == 0)
+        return 0;
+    if (!vertices.allFinite())
+        return ~0U;
+    const Vec3 low = vertices.colwise().minCoeff().transpose(), high = vertices.colwise().maxCoeff().transpose();
     std::uint32_t near = 0;
-    for (std::size_t k = 0; k < planes.size(); ++k) {
-        if (k >= 32) {
-            near = ~0U;
-            break;
-        }
+    for (std::size_t k = 0; k < std::min(planes.size(), MASKED_PLANES); ++k) {
         const PlaneObstacle& plane = planes[k];
         double lowest = 0.0, scale = 0.0;
         for (int i = 0; i < 3; ++i) {
             const double n = plane.normal[i];
-            lowest += ((n >= 0.0 ? box.min[i] : box.max[i]) - plane.point[i]) * n;
-            scale += (std::max(std::abs(box.min[i]), std::abs(box.max[i])) + std::abs(plane.point[i])) * std::abs(n);
+            lowest += ((n >= 0.0 ? low[i] : high[i]) - plane.point[i]) * n;
+            scale += (std::max(std::abs(low[i]), std::abs(high[i])) + std::abs(plane.point[i])) * std::abs(n);
         }
-        // Not (lowest > margin): an empty or non-finite box is near every plane.
-        if (!(lowest > 1e-12 * scale) || !std::isfinite(scale))
+        // Not (lowest > margin), so that a NaN from the plane counts as near too.
+        if (!(lowest > HEIGHT_ROUNDING * scale + std::numeric_limits<double>::min()))
             near |= 1U << k;
     }
     return near;
@@ -52,12 +61,12 @@ void detect_plane_contacts(const std::vector<ContactSurface>& surfaces, Index nu
             const ContactSurface& surface = surfaces[static_cast<std::size_t>(b)];
             std::vector<ContactPoint>& out = per_body[static_cast<std::size_t>(b)];
             out.clear();
-            const std::uint32_t near = planes_near(surface.tree.bounds(), planes);
-            if (near == 0)
+            const std::uint32_t near = planes_near(surface.vertices, planes);
+            if (near == 0 && planes.size() <= MASKED_PLANES)
                 continue;
             for (Index v = 0; v < surface.vertices.rows(); ++v)
                 for (std::size_t k = 0; k < planes.size(); ++k) {
-                    if (k < 32 && !((near >> k) & 1U))
+                    if (k < MASKED_PLANES && !((near >> k) & 1U))
                         continue;
                     const double height =
                         (surface.vertices.row(v).transpose() - planes[k].point).dot(planes[k].normal);

@@ -22,10 +22,9 @@ struct PlaneContactScratch {
 };
 
 /// Every surface vertex below a plane: depth = −(x − point)·normal, normal = the plane's,
-/// face = −1, other = ContactTarget::plane(k). Sorted by contact_order(). A surface whose tree
-/// box lies wholly above a plane is not tested against it vertex by vertex.
-/// @param[in] surfaces  contact surfaces, their trees fitted to their vertices (as update()
-///                      leaves them); only the first `num_bodies` are tested
+/// face = −1, other = ContactTarget::plane(k). Sorted by contact_order(). A surface whose
+/// vertices' box lies wholly above a plane is not tested against it vertex by vertex.
+/// @param[in] surfaces  contact surfaces; every vertex row of the first `num_bodies` is tested
 /// @param[out] points   the contact points; its old content is replaced, its capacity kept (a
 ///                      time loop passing the same vector and scratch allocates nothing once
 ///                      they have grown to the scene's contacts)
