@@ -21,14 +21,25 @@ constexpr double HEIGHT_ROUNDING = 1e-12;
 /// Bit k (k < MASKED_PLANES) set unless every vertex lies above plane k by more than the
 /// rounding of its height, so that no vertex whose computed height is negative is left out
 /// where the bit is clear. A non-finite vertex sets every bit.
-std::uint32_t planes_near(CRef<Positions> vertices, const std::vector<PlaneObstacle>& planes)
+std::uint32_t planes_near(const Positions& vertices, const std::vector<PlaneObstacle>& planes)
 {
     // Every vertex row, not the tree's box: an embedded surface may keep vertices no face uses.
+    // One pass through the rows (Eigen's column-wise reductions walk them three times).
     if (vertices.rows() == 0)
         return 0;
-    if (!vertices.allFinite())
+    double low[3], high[3];
+    const double* x = vertices.data();
+    for (int i = 0; i < 3; ++i)
+        low[i] = high[i] = x[i];
+    bool finite = true;
+    for (Index v = 0; v < vertices.rows(); ++v, x += 3)
+        for (int i = 0; i < 3; ++i) {
+            finite = finite && std::abs(x[i]) <= std::numeric_limits<double>::max();
+            low[i] = std::min(low[i], x[i]);
+            high[i] = std::max(high[i], x[i]);
+        }
+    if (!finite)
         return ~0U;
-    const Vec3 low = vertices.colwise().minCoeff().transpose(), high = vertices.colwise().maxCoeff().transpose();
     std::uint32_t near = 0;
     for (std::size_t k = 0; k < std::min(planes.size(), MASKED_PLANES); ++k) {
         const PlaneObstacle& plane = planes[k];
