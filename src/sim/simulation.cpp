@@ -197,7 +197,6 @@ void Simulation::update_contact_response()
 
 void Simulation::dynamic_step()
 {
-    static const std::vector<VecX> no_forces;
     const double dt = m_spec.simulation.dt;
     PhaseTimes& phases = m_totals.phases;
     collectively([&] {
@@ -206,7 +205,7 @@ void Simulation::dynamic_step()
             m_system.element_loop(dt);
         }
         ScopedTimer timer(phases.assembly);
-        m_system.assemble(dt, m_spec.simulation.gravity, m_spec.contact.enabled ? m_scene.contact_forces : no_forces);
+        m_system.assemble(dt, m_spec.simulation.gravity, m_scene.contact_forces); // empty without contact
     });
     ScopedTimer timer(phases.solve);
     const PreconditionerTimes before = m_system.preconditioner_times();
