@@ -213,10 +213,9 @@ AxisOutcome axis_test_exact(const ContactSurface& surface, const Vec3& point, in
 {
     const Frame f = frame_of(point, axis);
     AxisHits hits(tol.tie_relative);
-    const Tris& faces = surface.faces;
-    detail::faces_on_axis_line(surface.tree, surface.vertices, point, axis, 0.0, [&](Index face) {
-        hits.add(classify_exact(vertex_ptr(surface, faces(face, 0)), vertex_ptr(surface, faces(face, 1)),
-                                vertex_ptr(surface, faces(face, 2)), f, tol),
+    detail::faces_on_axis_line(surface.tree, surface.vertices, point, axis, 0.0, [&](Index face, const Index* corners) {
+        hits.add(classify_exact(vertex_ptr(surface, corners[0]), vertex_ptr(surface, corners[1]),
+                                vertex_ptr(surface, corners[2]), f, tol),
                  face);
         return hits.cutoff();
     });
@@ -364,11 +363,11 @@ void inside_tests_packet(const ContactSurface& surface, const Vec3* points, int 
         hits[q].reset(tol.tie_relative);
         frames[q] = frame_of(points[q], 0);
     }
-    const Tris& faces = surface.faces;
-    detail::faces_on_axis_lines(surface.tree, surface.vertices, points, count, 0, 0.0, [&](int q, Index face) {
+    detail::faces_on_axis_lines(surface.tree, surface.vertices, points, count, 0, 0.0,
+                                [&](int q, Index face, const Index* corners) {
         AxisHits& h = hits[q];
-        h.add(classify_exact(vertex_ptr(surface, faces(face, 0)), vertex_ptr(surface, faces(face, 1)),
-                             vertex_ptr(surface, faces(face, 2)), frames[q], tol),
+        h.add(classify_exact(vertex_ptr(surface, corners[0]), vertex_ptr(surface, corners[1]),
+                             vertex_ptr(surface, corners[2]), frames[q], tol),
               face);
         return h.cutoff();
     });

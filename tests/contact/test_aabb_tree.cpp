@@ -99,7 +99,11 @@ void expect_queries_equal_brute_force(const AabbTree& tree, const SurfaceMesh& m
         const double tolerance = q % 2 == 0 ? 0.0 : 0.01;
         const int u = (axis + 1) % 3, v = (axis + 2) % 3;
         got.clear();
-        detail::faces_on_axis_line(tree, m.vertices, p, axis, tolerance, [&](Index f) { got.push_back(f); });
+        detail::faces_on_axis_line(tree, m.vertices, p, axis, tolerance, [&](Index f, const Index* corners) {
+            got.push_back(f);
+            for (int c = 0; c < 3; ++c) // the face's vertices, in its order (orientation)
+                ASSERT_EQ(corners[c], m.faces(f, c)) << "face " << f << " corner " << c;
+        });
         std::sort(got.begin(), got.end());
         ASSERT_TRUE(std::adjacent_find(got.begin(), got.end()) == got.end()) << "a face visited twice";
         want.clear();
@@ -116,7 +120,7 @@ void expect_queries_equal_brute_force(const AabbTree& tree, const SurfaceMesh& m
         }
         ASSERT_EQ(got, want) << "axis query " << q;
         got.clear();
-        detail::faces_on_axis_line(tree, m.vertices, p, axis, tolerance, [&](Index f) {
+        detail::faces_on_axis_line(tree, m.vertices, p, axis, tolerance, [&](Index f, const Index*) {
             got.push_back(f);
             return cutoff;
         });
@@ -205,7 +209,7 @@ TEST(AabbTree, FacesBeyondTheFloatRangeHideNoOtherFace)
     for (Index f = 0; f < m.faces.rows(); ++f) {
         const Vec3 c = (vertex(m, f, 0) + vertex(m, f, 1) + vertex(m, f, 2)) / 3.0;
         bool met = false;
-        detail::faces_on_axis_line(tree, m.vertices, c, 0, 0.0, [&](Index g) { met = met || g == f; });
+        detail::faces_on_axis_line(tree, m.vertices, c, 0, 0.0, [&](Index g, const Index*) { met = met || g == f; });
         EXPECT_TRUE(met) << "face " << f;
     }
     Aabb bounds;
@@ -285,7 +289,7 @@ TEST(AabbTree, EmptyTreeAnswersNothing)
     tree.faces_overlapping(Positions(0, 3), Aabb{Vec3::Zero(), Vec3::Ones()}, out);
     EXPECT_TRUE(out.empty());
     int visits = 0;
-    detail::faces_on_axis_line(tree, Positions(0, 3), Vec3::Zero(), 0, 1.0, [&](Index) { ++visits; });
+    detail::faces_on_axis_line(tree, Positions(0, 3), Vec3::Zero(), 0, 1.0, [&](Index, const Index*) { ++visits; });
     EXPECT_EQ(visits, 0);
     EXPECT_EQ(tree.nearest(Positions(0, 3), Vec3::Zero()).face, -1);
 }
@@ -301,7 +305,7 @@ TEST(AabbTree, NearestAndAxisLineFromAFarPoint)
     EXPECT_EQ(got.distance, std::sqrt(best));
     // The x line through (−3e19, 0.1, 0.2) crosses the sphere: faces are visited.
     int visits = 0;
-    detail::faces_on_axis_line(s.tree, s.vertices, Vec3(-3e19, 0.1, 0.2), 0, 0.0, [&](Index) {
+    detail::faces_on_axis_line(s.tree, s.vertices, Vec3(-3e19, 0.1, 0.2), 0, 0.0, [&](Index, const Index*) {
         ++visits;
         return std::numeric_limits<double>::infinity();
     });

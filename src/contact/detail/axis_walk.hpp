@@ -15,9 +15,11 @@ namespace coro::detail {
 /// Lines per packet of faces_on_axis_lines().
 constexpr int AXIS_PACKET = 8;
 
-/// Calls `visit(face)` for every face whose box is crossed by the axis-parallel line through
-/// `point` along `axis` (0 = x, 1 = y, 2 = z), i.e. whose box contains `point` in the two other
-/// coordinates (closed, grown by `tolerance`).
+/// Calls `visit(face, corners)` for every face whose box is crossed by the axis-parallel line
+/// through `point` along `axis` (0 = x, 1 = y, 2 = z), i.e. whose box contains `point` in the two
+/// other coordinates (closed, grown by `tolerance`); `corners` are the face's three vertices in
+/// the order of the surface's faces (the tree's copy, just read for the face's box: the faces
+/// array need not be read again).
 ///
 /// `visit` either returns void (every such face is visited) or a double, the largest distance
 /// along the axis still of interest: subtrees whose boxes lie farther than the smallest value
@@ -67,16 +69,17 @@ void faces_on_axis_line(const AabbTree& tree, CRef<Positions> vertices, const Ve
             const int k = __builtin_ctz(static_cast<unsigned>(m));
             const auto slot = static_cast<std::size_t>(-1 - node.child[k]);
             const Aabb fb = TreeAccess::slot_box(tree, vertices.data(), vertices.outerStride(), slot); // exact
+            const Index* corners = TreeAccess::slot_vertices(tree, slot);
             if (pu < fb.min[u] - tolerance || pu > fb.max[u] + tolerance || pv < fb.min[v] - tolerance ||
                 pv > fb.max[v] + tolerance)
                 continue;
             if (static_cast<double>(gaps[k]) > cutoff * (1.0 + 0x1p-20))
                 continue;
             const Index face = TreeAccess::face_of_slot(tree)[slot];
-            if constexpr (std::is_void_v<decltype(visit(face))>) {
-                visit(face);
+            if constexpr (std::is_void_v<decltype(visit(face, corners))>) {
+                visit(face, corners);
             } else {
-                const double limit = static_cast<double>(visit(face));
+                const double limit = static_cast<double>(visit(face, corners));
                 if (limit < cutoff) {
                     cutoff = limit;
                     cutoff_f = float_threshold(cutoff);
@@ -90,7 +93,7 @@ void faces_on_axis_line(const AabbTree& tree, CRef<Positions> vertices, const Ve
 /// faces_on_axis_line() for a packet of up to AXIS_PACKET parallel lines (same `axis`), walked
 /// together: at each node each line gets the child mask the single walk would give it (its own
 /// float interval, its own cutoff), a child is entered if some line needs it, and
-/// `visit(lane, face)` is called only for the lines (lanes 0 .. count − 1 of `points`) whose own
+/// `visit(lane, face, corners)` is called only for the lines (lanes 0 .. count − 1 of `points`) whose own
 /// mask holds the face and which pass the same exact double box test. `visit` returns the lane's
 /// largest distance along the axis still of interest, as for the single walk. Each line meets
 /// every face that the single walk could give it within its final cutoff; the order of the
@@ -163,6 +166,7 @@ void faces_on_axis_lines(const AabbTree& tree, CRef<Positions> vertices, const V
                 continue;
             const auto slot = static_cast<std::size_t>(-1 - node.child[k]);
             const Aabb fb = TreeAccess::slot_box(tree, vertices.data(), vertices.outerStride(), slot); // exact
+            const Index* corners = TreeAccess::slot_vertices(tree, slot);
             const Index face = TreeAccess::face_of_slot(tree)[slot];
             for (unsigned l = lines[k]; l != 0; l &= l - 1) {
                 const int q = __builtin_ctz(l);
@@ -171,7 +175,7 @@ void faces_on_axis_lines(const AabbTree& tree, CRef<Positions> vertices, const V
                     continue;
                 if (static_cast<double>(gaps[k][q]) > cutoff[q] * (1.0 + 0x1p-20))
                     continue;
-                const double limit = static_cast<double>(visit(q, face));
+                const double limit = static_cast<double>(visit(q, face, corners));
                 if (limit < cutoff[q]) {
                     cutoff[q] = limit;
                     cutoff_f[q] = float_threshold(limit);
