@@ -93,13 +93,14 @@ void faces_on_axis_line(const AabbTree& tree, CRef<Positions> vertices, const Ve
 /// faces_on_axis_line() for a packet of up to AXIS_PACKET parallel lines (same `axis`), walked
 /// together: at each node each line gets the child mask the single walk would give it (its own
 /// float interval, its own cutoff), a child is entered if some line needs it, and
-/// `visit(lane, face, corners)` is called only for the lines (lanes 0 .. count − 1 of `points`) whose own
-/// mask holds the face and which pass the same exact double box test. `visit` returns the lane's
-/// largest distance along the axis still of interest, as for the single walk. Each line meets
-/// every face that the single walk could give it within its final cutoff; the order of the
-/// visits differs (children are ordered by the gaps of the packet's first active line), so a
-/// visitor must not depend on it. Cheaper than count single walks when the lines are close
-/// together (their paths through the tree share most nodes).
+/// `visit(lane, face, corners)` is called only for the lines (lanes 0 .. count − 1 of `points`)
+/// whose own mask holds the face and which pass the same exact double box test (`corners` as
+/// for the single walk). `visit` returns the lane's largest distance along the axis still of
+/// interest, as for the single walk. Each line meets every face that the single walk could give
+/// it within its final cutoff; the order of the visits differs (children are ordered by the gaps
+/// of the packet's first active line), so a visitor must not depend on it. Cheaper than count
+/// single walks when the lines are close together (their paths through the tree share most
+/// nodes).
 /// @param[in] points  count points, 1 ≤ count ≤ AXIS_PACKET
 template <class Visit>
 void faces_on_axis_lines(const AabbTree& tree, CRef<Positions> vertices, const Vec3* points, int count, int axis,
