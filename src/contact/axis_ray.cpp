@@ -363,14 +363,14 @@ void inside_tests_packet(const ContactSurface& surface, const Vec3* points, int 
         hits[q].reset(tol.tie_relative);
         frames[q] = frame_of(points[q], 0);
     }
-    detail::faces_on_axis_lines(surface.tree, surface.vertices, points, count, 0, 0.0,
-                                [&](int q, Index face, const Index* corners) {
+    const auto visit = [&](int q, Index face, const Index* corners) {
         AxisHits& h = hits[q];
         h.add(classify_exact(vertex_ptr(surface, corners[0]), vertex_ptr(surface, corners[1]),
                              vertex_ptr(surface, corners[2]), frames[q], tol),
               face);
         return h.cutoff();
-    });
+    };
+    detail::faces_on_axis_lines(surface.tree, surface.vertices, points, count, 0, 0.0, visit);
     for (int q = 0; q < count; ++q) {
         InsideTest& result = results[q];
         result = InsideTest();
