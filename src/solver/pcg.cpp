@@ -2,6 +2,8 @@
 
 #include <corocontact/core/error.hpp>
 
+#include "detail/lane_sums.hpp"
+
 #include <algorithm>
 #include <cmath>
 
@@ -69,13 +71,7 @@ void PcgSolver::residual_pass(const SceneMatrix& a, const double* b, double* x)
     Preconditioner& preconditioner = *m_preconditioner;
     const bool local = preconditioner.is_chunk_local();
     const auto chunk_sums = [&](Index c, std::ptrdiff_t begin, std::ptrdiff_t end) {
-        double rr = 0.0, rz = 0.0;
-        for (std::ptrdiff_t i = begin; i < end; ++i) {
-            rr += r[i] * r[i];
-            rz += r[i] * z[i];
-        }
-        m_partials[2 * at(c)] = rr;
-        m_partials[2 * at(c) + 1] = rz;
+        detail::lane_dots(r + begin, z + begin, end - begin, m_partials[2 * at(c)], m_partials[2 * at(c) + 1]);
     };
     for_each_chunk(a.chunks(), [&](Index c, Index row_begin, Index row_end) {
         if (!m_chunk_active[at(c)])

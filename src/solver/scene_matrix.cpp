@@ -1,5 +1,7 @@
 #include <corocontact/solver/scene_matrix.hpp>
 
+#include "detail/lane_sums.hpp"
+
 #include <stdexcept>
 #include <string>
 
@@ -83,10 +85,8 @@ void SceneMatrix::multiply(const double* x, double* y, double* chunk_dots, const
         m_coupling.multiply_add(c, x, y);
         if (!chunk_dots)
             return;
-        double sum = 0.0;
-        for (std::ptrdiff_t i = 3 * static_cast<std::ptrdiff_t>(begin); i < 3 * static_cast<std::ptrdiff_t>(end); ++i)
-            sum += x[i] * y[i];
-        chunk_dots[c] = sum;
+        const std::ptrdiff_t first = 3 * static_cast<std::ptrdiff_t>(begin);
+        chunk_dots[c] = detail::lane_dot(x + first, y + first, 3 * static_cast<std::ptrdiff_t>(end - begin));
     };
     for_each_chunk(m_chunks, [&](Index c, Index begin, Index end) {
         if (active && !active[c])
