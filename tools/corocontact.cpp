@@ -453,8 +453,8 @@ int detect_case(const DetectOptions& options)
                  points.size(), vertices_inside.size());
     std::fprintf(report,
                  "  %d vertices on a surface (counted outside), %d winding-number fallbacks, %d answered by a "
-                 "neighbour (clear-edge group)\n",
-                 stats.on_surface, stats.winding_fallbacks, stats.by_neighbour);
+                 "neighbour (clear-edge group), %d outside the other surface's hull slabs (not tested)\n",
+                 stats.on_surface, stats.winding_fallbacks, stats.by_neighbour, stats.by_hull);
 
 #if CORO_WITH_EMBREE
     if (!options.cross_check.empty()) {

@@ -121,6 +121,59 @@ const std::vector<PairCandidates>& find_candidates(const std::vector<ContactSurf
     return pair_candidates(surfaces, mode, state);
 }
 
+/// Exact mode with shared answers, after the grouping is decided: the candidates of pairs not
+/// grouped that lie outside the hull slabs of a closed `other` are dropped. Such a pair tests
+/// each candidate on its own (a walk of a small, cold tree, ~0.3 µs), and in a pile of small
+/// bodies the slabs reject ~60 % of them. Grouped pairs keep theirs: their answers are shared
+/// along clear edges, and chains through the dropped vertices carry the distance bounds that
+/// start the depth searches.
+/// Returns how many were dropped.
+Index drop_candidates_outside_hulls(const std::vector<ContactSurface>& surfaces, detail::DetectionState& state)
+{
+    std::vector<PairCandidates>& candidates = state.candidates.items();
+    const std::vector<std::size_t>& pair_of = state.grouping.slot_pairs_of;
+    const std::vector<detail::PairSlots>& slot_pairs = state.slot_pairs.items();
+    const auto filtered = [&](std::size_t k) {
+        const PairCandidates& c = candidates[k];
+        return !slot_pairs[pair_of[k]].grouped && surfaces[static_cast<std::size_t>(c.other)].closed &&
+               !c.vertices.empty();
+    };
+    state.hull_wanted.assign(surfaces.size(), 0);
+    state.dropped.assign(candidates.size(), 0);
+    for (std::size_t k = 0; k < candidates.size(); ++k)
+        if (filtered(k))
+            state.hull_wanted[static_cast<std::size_t>(candidates[k].other)] = 1;
+    state.hulls.resize(surfaces.size());
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, surfaces.size(), 16),
+                      [&](const tbb::blocked_range<std::size_t>& range) {
+                          for (std::size_t s = range.begin(); s < range.end(); ++s)
+                              if (state.hull_wanted[s])
+                                  state.hulls[s] = detail::HullSlabs::of(surfaces[s].vertices);
+                      });
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, candidates.size(), 8),
+                      [&](const tbb::blocked_range<std::size_t>& range) {
+                          for (std::size_t k = range.begin(); k < range.end(); ++k) {
+                              if (!filtered(k))
+                                  continue;
+                              PairCandidates& c = candidates[k];
+                              const ContactSurface& body = surfaces[static_cast<std::size_t>(c.body)];
+                              const detail::HullSlabs& hull = state.hulls[static_cast<std::size_t>(c.other)];
+                              const std::size_t before = c.vertices.size();
+                              c.vertices.erase(std::remove_if(c.vertices.begin(), c.vertices.end(),
+                                                              [&](Index v) {
+                                                                  return !hull.may_contain(
+                                                                      body.vertices.row(v).transpose());
+                                                              }),
+                                               c.vertices.end());
+                              state.dropped[k] = static_cast<Index>(before - c.vertices.size());
+                          }
+                      });
+    Index dropped = 0;
+    for (const Index n : state.dropped)
+        dropped += n;
+    return dropped;
+}
+
 /// Mid phase and narrow phase of the broad phase's state.pairs, into points.
 void detect_pairs(const std::vector<ContactSurface>& surfaces, const DetectionSettings& settings,
                   detail::DetectionState& state, std::vector<ContactPoint>& points, DetectionStats* stats)
@@ -141,6 +194,7 @@ void detect_pairs(const std::vector<ContactSurface>& surfaces, const DetectionSe
     // Which pairs are grouped depends on their candidates: the mid phase comes first.
     const std::vector<PairCandidates>& candidates = pair_candidates(surfaces, settings.mode, state);
     detail::overlapping_slot_pairs(surfaces, state.pairs, candidates, state.grouping, state.slot_pairs);
+    const Index by_hull = drop_candidates_outside_hulls(surfaces, state);
     // Each pair's answers are taken in its own task, as they come; with depth searches to do,
     // its blocks are nested tasks.
     DetectionPass pass(surfaces, candidates, settings.contact_data, state);
@@ -163,7 +217,7 @@ void detect_pairs(const std::vector<ContactSurface>& surfaces, const DetectionSe
                     take_block(b);
             });
         });
-    pass.finish(count_pairs(candidates), stats, points);
+    pass.finish(count_pairs(candidates), stats, points, by_hull);
 }
 
 } // namespace

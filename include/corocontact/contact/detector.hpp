@@ -68,6 +68,9 @@ struct DetectionStats {
     Index on_surface = 0;         ///< exact mode: vertices lying on the other surface (not inside)
     Index by_neighbour = 0;       ///< exact mode: vertices that took the answer of the first vertex
                                   ///< of their clear-edge group (DetectionSettings::share_answers)
+    Index by_hull = 0;            ///< exact mode, shared answers: vertices of pairs too small to
+                                  ///< group that lie outside the other surface's hull slabs (a
+                                  ///< 26-sided polytope around it), outside without a test
 };
 
 struct DetectionSettings {

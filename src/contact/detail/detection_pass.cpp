@@ -260,11 +260,13 @@ void DetectionPass::sorted_points(std::vector<ContactPoint>& points)
     CORO_ASSERT(points.size() == total);
 }
 
-void DetectionPass::finish(Index pairs, DetectionStats* stats, std::vector<ContactPoint>& points)
+void DetectionPass::finish(Index pairs, DetectionStats* stats, std::vector<ContactPoint>& points, Index by_hull)
 {
     if (stats) {
         DetectionStats sum;
         sum.pairs = pairs;
+        sum.candidate_vertices = by_hull;
+        sum.by_hull = by_hull;
         for (const DetectionStats& s : m_state.stats) {
             sum.candidate_vertices += s.candidate_vertices;
             sum.inside += s.inside;

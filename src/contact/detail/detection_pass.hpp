@@ -36,7 +36,7 @@ public:
 
     /// The inside points, sorted, into `points` (its old content replaced); the counts of every
     /// block taken, with `pairs`, into `stats`.
-    void finish(Index pairs, DetectionStats* stats, std::vector<ContactPoint>& points);
+    void finish(Index pairs, DetectionStats* stats, std::vector<ContactPoint>& points, Index by_hull = 0);
 
 private:
     /// The contact points of the inside candidates among first .. first + count − 1 of pair k,

@@ -8,6 +8,7 @@
 
 #include "clear_edge_groups.hpp"
 #include "grouped_inside_tests.hpp"
+#include "hull_slabs.hpp"
 #include "nearest_search.hpp"
 #include "pair_buffers.hpp"
 
@@ -38,6 +39,9 @@ class DetectionState {
 public:
     // Broad and mid phase.
     std::vector<Aabb> boxes;                   ///< per surface, its tree's bounds
+    std::vector<HullSlabs> hulls;              ///< per surface: its slabs, where hull_wanted
+    std::vector<unsigned char> hull_wanted;    ///< per surface: tested by a pair not grouped
+    std::vector<Index> dropped;                ///< per entry of `directed`: candidates outside the hull
     std::vector<Index> sweep_order;            ///< overlapping_pairs()' working memory
     std::vector<std::pair<Index, Index>> pairs; ///< the overlapping surfaces (body < other)
     std::vector<std::pair<Index, Index>> directed; ///< both directions of each pair, ascending
