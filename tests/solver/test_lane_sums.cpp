@@ -28,13 +28,13 @@ std::vector<double> wide_values(std::size_t n, unsigned seed)
 
 double scalar_in_lane_order(const double* x, const double* y, std::size_t n)
 {
-    double s[detail::LANES] = {};
+    double s[detail::DOT_LANES] = {};
     for (std::size_t i = 0; i < n; ++i)
-        s[i % detail::LANES] += x[i] * y[i];
-    double pairs[detail::LANES];
-    for (int k = 0; k < detail::LANES; ++k)
+        s[i % detail::DOT_LANES] += x[i] * y[i];
+    double pairs[detail::DOT_LANES];
+    for (int k = 0; k < detail::DOT_LANES; ++k)
         pairs[k] = s[k];
-    for (int width = detail::LANES / 2; width > 0; width /= 2)
+    for (int width = detail::DOT_LANES / 2; width > 0; width /= 2)
         for (int k = 0; k < width; ++k)
             pairs[k] = pairs[2 * k] + pairs[2 * k + 1];
     return pairs[0];
