@@ -4,10 +4,10 @@
 // One running sum is a chain of dependent additions: the loop runs at one element per add
 // latency (4 cycles), far below what the caches deliver, and a PCG iteration has two such dots.
 // Here element i goes to running sum i mod DOT_LANES, each kept in element order, and the
-// DOT_LANES sums are then added pairwise. The compiler keeps the sums in vector registers (the lanes are
-// independent, so no reassociation is needed); scalar, SSE, AVX2 and AVX-512 builds add the same
-// numbers in the same order. A chunk's result depends on its own elements only, never on the
-// thread count.
+// DOT_LANES sums are then added pairwise. The compiler keeps the sums in vector registers (the
+// lanes are independent, so no reassociation is needed); scalar, SSE, AVX2 and AVX-512 builds
+// add the same numbers in the same order. A chunk's result depends on its own elements only,
+// never on the thread count.
 
 #include <cstddef>
 #include <cstring>
