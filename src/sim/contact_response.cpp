@@ -97,52 +97,40 @@ void ContactResponse::compute(const std::vector<Body>& bodies, const std::vector
     evaluate_contacts(surfaces, contacts, BodyNodes(bodies), settings, dt, m_records);
     apply(
         m_records, bodies, [](Index surface) { return surface; },
-        [&](Index surface, Index node) { return matrix.offset(surface) + node; }, nullptr, matrix, forces);
+        [&](Index surface, Index node) { return matrix.offset(surface) + node; }, matrix, forces);
 }
 
 void ContactResponse::apply(const ContactRecords& records, const std::vector<Body>& bodies,
                             FunctionRef<Index(Index surface)> local_body,
-                            FunctionRef<Index(Index surface, Index node)> column,
-                            const std::vector<Index>* column_order, SceneMatrix& matrix,
+                            FunctionRef<Index(Index surface, Index node)> column, SceneMatrix& matrix,
                             std::vector<VecX>& forces)
 {
     forces.resize(bodies.size());
     for (std::size_t b = 0; b < bodies.size(); ++b)
         forces[b].setZero(3 * bodies[b].num_vertices());
 
-    // Blocks: every pair of shares of a contact whose row is here, contact after contact.
-    const Index n_contacts = records.size();
-    m_block_offsets.resize(at(n_contacts) + 1);
-    m_block_offsets[0] = 0;
-    for (Index i = 0; i < n_contacts; ++i) {
-        const Index first = records.share_offsets[at(i)], end = records.share_offsets[at(i) + 1];
-        Index rows = 0;
-        for (Index s = first; s < end; ++s)
-            rows += local_body(records.shares[at(s)].surface) >= 0 ? 1 : 0;
-        m_block_offsets[at(i) + 1] = m_block_offsets[at(i)] + rows * (end - first);
-    }
-    CouplingBlocks& coupling = matrix.coupling();
-    coupling.reset(m_block_offsets.back());
+    // One coupling term per contact: its K, and its shares' rows here and columns.
+    ContactCoupling& coupling = matrix.coupling();
+    coupling.reset(records.share_offsets);
     m_share_forces.resize(records.shares.size());
-    tbb::parallel_for(tbb::blocked_range<Index>(0, n_contacts, CONTACT_GRAIN), [&](const tbb::blocked_range<Index>& range) {
+    const tbb::blocked_range<Index> all_contacts(0, records.size(), CONTACT_GRAIN);
+    tbb::parallel_for(all_contacts, [&](const tbb::blocked_range<Index>& range) {
         for (Index i = range.begin(); i != range.end(); ++i) {
             const ContactTerms& terms = records.terms[at(i)];
             const Index first = records.share_offsets[at(i)], end = records.share_offsets[at(i) + 1];
-            Index block = m_block_offsets[at(i)];
-            for (Index r = first; r < end; ++r) {
-                const ContactShare& row = records.shares[at(r)];
-                const Index body = local_body(row.surface);
-                if (body < 0)
-                    continue;
-                m_share_forces[at(r)] = terms.force_on(row);
-                const Index scene_row = matrix.offset(body) + row.node;
-                for (Index c = first; c < end; ++c) {
-                    const ContactShare& col = records.shares[at(c)];
-                    CouplingBlocks::Entry& entry = coupling.entry(block++);
-                    entry.row = scene_row;
-                    entry.column = column(col.surface, col.node);
-                    entry.value = terms.block(row, col);
-                }
+            coupling.stiffness(i) = terms.stiffness;
+            bool rows_here = false;
+            for (Index s = first; s < end; ++s)
+                rows_here = rows_here || local_body(records.shares[at(s)].surface) >= 0;
+            for (Index s = first; s < end; ++s) {
+                const ContactShare& share = records.shares[at(s)];
+                const Index body = local_body(share.surface);
+                if (body >= 0)
+                    m_share_forces[at(s)] = terms.force_on(share);
+                ContactCoupling::Share& out = coupling.share(i, s - first);
+                out.row = body >= 0 && !share.fixed ? matrix.offset(body) + share.node : -1;
+                out.column = rows_here ? column(share.surface, share.node) : 0; // read only for rows here
+                out.coefficient = share.fixed ? 0.0 : share.coefficient;
             }
         }
     });
@@ -153,7 +141,7 @@ void ContactResponse::apply(const ContactRecords& records, const std::vector<Bod
         if (body >= 0)
             forces[at(body)].segment<3>(3 * share.node) += m_share_forces[s];
     }
-    coupling.finish(matrix.chunks(), column_order);
+    coupling.finish(matrix.chunks());
 }
 
 } // namespace coro

@@ -115,22 +115,6 @@ RankContact::RankContact(Communicator& communicator, const BodyOwnership& owners
     for (Index r = 0; r < ownership.num_ranks; ++r)
         m_rank_bodies.push_back(ownership.bodies_of(r));
 
-    // The rows of every case body in one process's numbering: each process tells its bodies' sizes.
-    std::vector<char> sizes;
-    ByteWriter out(sizes);
-    for (const Body& body : scene.bodies)
-        out.put(body.num_vertices());
-    const std::vector<std::vector<char>> all = communicator.all_gather(sizes);
-    std::vector<Index> vertices(at(m_num_bodies), 0);
-    for (std::size_t r = 0; r < all.size(); ++r) {
-        ByteReader in(all[r]);
-        for (const Index b : m_rank_bodies[r])
-            vertices[at(b)] = in.get<Index>();
-    }
-    m_first_row.assign(at(m_num_bodies) + 1, 0);
-    for (Index b = 0; b < m_num_bodies; ++b)
-        m_first_row[at(b) + 1] = m_first_row[at(b)] + vertices[at(b)];
-
     for (std::size_t l = 0; l < m_ids.size(); ++l) {
         m_surface_nodes.push_back(surface_nodes(scene.surfaces[l]));
         std::vector<Vec3>& start = m_start_positions.emplace_back();
@@ -472,13 +456,6 @@ RankContact::Counts RankContact::detect(Scene& scene, const ContactSettings& set
             halo.ghost_rows[k].push_back(by_rank[g].second);
     }
 
-    // Columns ordered as one process numbers them: own rows, then the ghosts.
-    std::vector<Index> column_order(at(rows + halo.num_ghosts));
-    for (Index l = 0; l < n_local; ++l)
-        for (Index v = 0; v < scene.bodies[at(l)].num_vertices(); ++v)
-            column_order[at(matrix.offset(l) + v)] = m_first_row[at(m_ids[at(l)])] + v;
-    for (std::size_t k = 0; k < ghosts.size(); ++k)
-        column_order[at(rows) + k] = m_first_row[at(ghosts[k].first)] + ghosts[k].second;
     response.apply(
         m_records, scene.bodies, [&](Index body) { return m_local[at(body)]; },
         [&](Index body, Index node) {
@@ -488,7 +465,7 @@ RankContact::Counts RankContact::detect(Scene& scene, const ContactSettings& set
             const auto ghost = std::lower_bound(ghosts.begin(), ghosts.end(), std::make_pair(body, node));
             return rows + static_cast<Index>(ghost - ghosts.begin());
         },
-        &column_order, matrix, scene.contact_forces);
+        matrix, scene.contact_forces);
     exchange.set_halo(std::move(halo));
     return counts;
 }

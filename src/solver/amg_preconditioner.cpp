@@ -9,7 +9,6 @@
 #include <array>
 #include <chrono>
 #include <cmath>
-#include <cstdint>
 #include <stdexcept>
 #include <string>
 #include <tuple>
@@ -98,11 +97,6 @@ struct AmgPreconditioner::Impl {
     const SceneMatrix* scene = nullptr; // of the solve in progress
     PreconditionerTimes times;
 
-    // The pattern PETSc's copy was built for.
-    std::vector<const BsrMatrix*> pattern_bodies;
-    std::vector<Index> pattern_body_blocks;
-    std::vector<std::uint64_t> pattern_coupling; // (row, column) of each coupling block
-
     // PETSc's copy: the whole scene matrix in scalar CSR, and where every stored block of the
     // bodies (its mirror below the diagonal too) and every coupling block goes in it.
     std::vector<PetscInt> row_offsets;
@@ -111,6 +105,7 @@ struct AmgPreconditioner::Impl {
     std::vector<Index> body_block_offsets;  // #bodies+1: body b's blocks are [b], [b+1)
     std::vector<ScalarBlock> upper_targets; // per body block
     std::vector<ScalarBlock> mirror_targets; // per body block (off-diagonal ones)
+    CouplingBlocks coupling;                   // the scene's contact coupling as blocks
     std::vector<ScalarBlock> coupling_targets; // per coupling block
     VecX positions; // #3N scene node positions of the last set-up
     std::vector<Block3> diagonal_blocks; // #N scratch of scene_diagonal()
@@ -188,25 +183,6 @@ struct AmgPreconditioner::Impl {
         return code;
     }
 
-    bool same_pattern(const SceneMatrix& a) const
-    {
-        if (matrix == nullptr || static_cast<Index>(pattern_bodies.size()) != a.num_bodies() ||
-            static_cast<Index>(pattern_coupling.size()) != a.coupling().size())
-            return false;
-        for (Index b = 0; b < a.num_bodies(); ++b)
-            if (pattern_bodies[at(b)] != &a.body_matrix(b) || pattern_body_blocks[at(b)] != a.body_matrix(b).num_blocks())
-                return false;
-        for (Index k = 0; k < a.coupling().size(); ++k)
-            if (pattern_coupling[at(k)] != key(a.coupling().block(k).row, a.coupling().block(k).column))
-                return false;
-        return true;
-    }
-
-    static std::uint64_t key(Index row, Index column)
-    {
-        return (static_cast<std::uint64_t>(static_cast<std::uint32_t>(row)) << 32) | static_cast<std::uint32_t>(column);
-    }
-
     // Builds the scalar CSR pattern of `a` and the targets of its blocks.
     void build_pattern(const SceneMatrix& a)
     {
@@ -235,8 +211,8 @@ struct AmgPreconditioner::Impl {
                         ++offsets[at(shift + m.columns()[at(k)]) + 1];
                 }
         }
-        for (Index k = 0; k < a.coupling().size(); ++k)
-            ++offsets[at(a.coupling().block(k).row) + 1];
+        for (Index k = 0; k < coupling.size(); ++k)
+            ++offsets[at(coupling.block(k).row) + 1];
         for (std::size_t r = 0; r < at(n); ++r)
             offsets[r + 1] += offsets[r];
         std::vector<Source> sources(at(offsets.back()));
@@ -252,14 +228,14 @@ struct AmgPreconditioner::Impl {
                         sources[at(fill[at(shift + c)]++)] = {shift + r, MIRROR, g};
                 }
         }
-        for (Index k = 0; k < a.coupling().size(); ++k) {
-            const CouplingBlocks::Entry& e = a.coupling().block(k);
+        for (Index k = 0; k < coupling.size(); ++k) {
+            const CouplingBlocks::Entry& e = coupling.block(k);
             sources[at(fill[at(e.row)]++)] = {e.column, COUPLING, k};
         }
 
         upper_targets.assign(at(body_block_offsets.back()), {});
         mirror_targets.assign(at(body_block_offsets.back()), {});
-        coupling_targets.assign(at(a.coupling().size()), {});
+        coupling_targets.assign(at(coupling.size()), {});
         row_offsets.assign(1, 0);
         columns.clear();
         std::vector<Index> row_columns;
@@ -295,16 +271,6 @@ struct AmgPreconditioner::Impl {
             }
         }
         values.assign(columns.size(), 0.0);
-
-        pattern_bodies.clear();
-        pattern_body_blocks.clear();
-        for (Index b = 0; b < a.num_bodies(); ++b) {
-            pattern_bodies.push_back(&a.body_matrix(b));
-            pattern_body_blocks.push_back(a.body_matrix(b).num_blocks());
-        }
-        pattern_coupling.clear();
-        for (Index k = 0; k < a.coupling().size(); ++k)
-            pattern_coupling.push_back(key(a.coupling().block(k).row, a.coupling().block(k).column));
     }
 
     void add(const ScalarBlock& target, const Block3& value, bool transposed)
@@ -329,8 +295,8 @@ struct AmgPreconditioner::Impl {
                         add(mirror_targets[at(g)], value, true);
                 }
         }
-        for (Index k = 0; k < a.coupling().size(); ++k)
-            add(coupling_targets[at(k)], a.coupling().block(k).value, false);
+        for (Index k = 0; k < coupling.size(); ++k)
+            add(coupling_targets[at(k)], coupling.block(k).value, false);
     }
 
     void gather_positions(const SceneMatrix& a)
@@ -364,6 +330,7 @@ struct AmgPreconditioner::Impl {
     {
         gather_positions(a);
         destroy();
+        a.coupling().blocks(a.num_block_rows(), coupling);
         build_pattern(a);
         fill_values(a);
         const auto n = static_cast<PetscInt>(a.num_dofs());

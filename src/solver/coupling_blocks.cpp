@@ -14,21 +14,17 @@ void CouplingBlocks::reset(Index count)
     m_size = 0;
 }
 
-void CouplingBlocks::finish(const RowChunks& chunks, const std::vector<Index>* column_order)
+void CouplingBlocks::finish(Index num_rows)
 {
     // A counting sort by row keeps each row's contributions in contribution order; a row's few
     // entries are then ordered by column with an insertion sort, which is stable too. So
     // repeated blocks are summed in contribution order, whatever wrote them when.
-    const auto key = [&](Index i) {
-        const Index column = m_entries[at(i)].column;
-        return column_order ? (*column_order)[at(column)] : column;
-    };
+    const auto key = [&](Index i) { return m_entries[at(i)].column; };
     const auto count = static_cast<Index>(m_entries.size());
-    const Index rows = chunks.num_rows();
-    m_row_offsets.assign(at(rows) + 1, 0);
+    m_row_offsets.assign(at(num_rows) + 1, 0);
     for (const Entry& e : m_entries)
         ++m_row_offsets[at(e.row) + 1];
-    for (Index r = 0; r < rows; ++r)
+    for (Index r = 0; r < num_rows; ++r)
         m_row_offsets[at(r) + 1] += m_row_offsets[at(r)];
     m_order.resize(at(count));
     for (Index i = 0; i < count; ++i)
@@ -36,7 +32,7 @@ void CouplingBlocks::finish(const RowChunks& chunks, const std::vector<Index>* c
     // m_row_offsets[r] now holds the end of row r; rows start where the previous one ends.
     m_sorted.resize(at(count));
     Index size = 0, begin = 0;
-    for (Index r = 0; r < rows; ++r) {
+    for (Index r = 0; r < num_rows; ++r) {
         const Index end = m_row_offsets[at(r)];
         for (Index k = begin + 1; k < end; ++k) { // insertion sort by column, stable
             const Index moving = m_order[at(k)];
@@ -57,24 +53,6 @@ void CouplingBlocks::finish(const RowChunks& chunks, const std::vector<Index>* c
     std::swap(m_entries, m_sorted);
     m_entries.resize(at(size)); // shrinking keeps the capacity
     m_size = size;
-
-    m_chunk_offsets.resize(at(chunks.num_chunks()) + 1);
-    Index k = 0;
-    for (Index c = 0; c <= chunks.num_chunks(); ++c) {
-        const Index row = chunks.offsets[at(c)];
-        while (k < size && m_entries[at(k)].row < row)
-            ++k;
-        m_chunk_offsets[at(c)] = c == chunks.num_chunks() ? size : k;
-    }
-}
-
-void CouplingBlocks::multiply_add(Index chunk, const double* x, double* y) const
-{
-    for (Index k = chunk_begin(chunk); k < chunk_begin(chunk + 1); ++k) {
-        const Entry& e = m_entries[at(k)];
-        Eigen::Map<Vec3>(y + 3 * static_cast<std::ptrdiff_t>(e.row)) +=
-            e.value * Eigen::Map<const Vec3>(x + 3 * static_cast<std::ptrdiff_t>(e.column));
-    }
 }
 
 } // namespace coro

@@ -119,11 +119,7 @@ void SceneMatrix::diagonal_blocks(Index chunk, Block3* out) const
     const Index offset = m_offsets[at(body)];
     for (Index r = begin; r < end; ++r)
         out[r - begin] = matrix.block(matrix.diagonal(r - offset));
-    for (Index k = m_coupling.chunk_begin(chunk); k < m_coupling.chunk_begin(chunk + 1); ++k) {
-        const CouplingBlocks::Entry& e = m_coupling.block(k);
-        if (e.row == e.column)
-            out[e.row - begin] += e.value;
-    }
+    m_coupling.add_diagonal(chunk, begin, out);
 }
 
 } // namespace coro

@@ -1,5 +1,5 @@
 // The AMG preconditioner in our scene PCG, against Jacobi-PCG and a sparse Cholesky solve of the
-// same elasticity systems: one body, and two bodies tied by contact coupling blocks.
+// same elasticity systems: one body, and two bodies tied by contact coupling terms.
 #include "near.hpp"
 
 #include <corocontact/core/primitives.hpp>
@@ -84,7 +84,7 @@ struct Elasticity {
 };
 
 /// Two blocks end to end: the clamped one, and a free one whose x = 0 face is tied by penalty
-/// coupling blocks k(u_i − u_j) to the first one's x = 8 face, so the pair acts as one beam.
+/// coupling terms k(u_i − u_j) to the first one's x = 8 face, so the pair acts as one beam.
 struct TiedPair {
     Elasticity left{30.0};
     Elasticity right{30.0, Vec3::Zero(), false};
@@ -104,15 +104,18 @@ struct TiedPair {
                     (left.mesh.rest_positions.row(i).tail<2>() - right.mesh.rest_positions.row(j).tail<2>()).norm() < 1e-9)
                     ties.emplace_back(i, scene.offset(1) + j);
         }
-        const Block3 k = 1e5 * Block3::Identity();
-        CouplingBlocks& coupling = scene.coupling();
-        coupling.reset(4 * static_cast<Index>(ties.size()));
+        // A stiff spring between each tied pair: shares i (+1) and j (−1) of K = 10⁵ I.
+        ContactCoupling& coupling = scene.coupling();
+        std::vector<Index> share_offsets{0};
+        for (std::size_t t = 0; t < ties.size(); ++t)
+            share_offsets.push_back(share_offsets.back() + 2);
+        coupling.reset(share_offsets);
         for (std::size_t t = 0; t < ties.size(); ++t) {
             const auto [i, j] = ties[t];
-            coupling.entry(static_cast<Index>(4 * t)) = {i, i, k};
-            coupling.entry(static_cast<Index>(4 * t + 1)) = {j, j, k};
-            coupling.entry(static_cast<Index>(4 * t + 2)) = {i, j, Block3(-k)};
-            coupling.entry(static_cast<Index>(4 * t + 3)) = {j, i, Block3(-k)};
+            const auto term = static_cast<Index>(t);
+            coupling.stiffness(term) = 1e5 * Mat3::Identity();
+            coupling.share(term, 0) = {i, i, 1.0};
+            coupling.share(term, 1) = {j, j, -1.0};
         }
         coupling.finish(scene.chunks());
         b.resize(scene.num_dofs());
@@ -130,11 +133,13 @@ SparseMat assembled(const SceneMatrix& scene)
             for (SparseMat::InnerIterator it(m, k); it; ++it)
                 triplets.emplace_back(3 * scene.offset(body) + it.row(), 3 * scene.offset(body) + it.col(), it.value());
     }
-    for (Index k = 0; k < scene.coupling().size(); ++k)
+    CouplingBlocks coupling;
+    scene.coupling().blocks(scene.num_block_rows(), coupling);
+    for (Index k = 0; k < coupling.size(); ++k)
         for (int i = 0; i < 3; ++i)
             for (int j = 0; j < 3; ++j)
-                triplets.emplace_back(3 * scene.coupling().block(k).row + i, 3 * scene.coupling().block(k).column + j,
-                                      scene.coupling().block(k).value(i, j));
+                triplets.emplace_back(3 * coupling.block(k).row + i, 3 * coupling.block(k).column + j,
+                                      coupling.block(k).value(i, j));
     SparseMat whole(scene.num_dofs(), scene.num_dofs());
     whole.setFromTriplets(triplets.begin(), triplets.end());
     return whole;

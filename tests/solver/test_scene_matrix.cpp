@@ -41,31 +41,51 @@ struct Bodies {
     BsrMatrix c = random_spd_upper(3, 3, {});
 };
 
-// Symmetric coupling between random rows, with repeated blocks: (r, c) and (c, r) = ᵀ; all
-// bodies in one component.
-void random_coupling(SceneMatrix& scene, unsigned seed, Index pairs)
+// A coupling term as the test wrote it: K and its shares (row, coefficient).
+struct Term {
+    Mat3 k;
+    std::vector<std::pair<Index, double>> shares;
+};
+
+// Random contact-like terms between random rows (1 to 4 shares, some twice the same node, some
+// with a fixed node), K symmetric positive semi-definite; all bodies in one component.
+std::vector<Term> random_coupling(SceneMatrix& scene, unsigned seed, Index count)
 {
     scene.set_components(std::vector<Index>(static_cast<std::size_t>(scene.num_bodies()), 0));
     std::mt19937 rng(seed);
-    std::uniform_real_distribution<double> u(-0.5, 0.5);
-    CouplingBlocks& coupling = scene.coupling();
-    coupling.reset(2 * pairs);
-    for (Index p = 0; p < pairs; ++p) {
-        const auto r = static_cast<Index>(rng() % static_cast<unsigned>(scene.num_block_rows()));
-        const auto c = static_cast<Index>(p % 7 == 0 ? r : rng() % static_cast<unsigned>(scene.num_block_rows()));
-        Block3 value;
+    std::uniform_real_distribution<double> u(-1.0, 1.0);
+    const auto row = [&] { return static_cast<Index>(rng() % static_cast<unsigned>(scene.num_block_rows())); };
+    std::vector<Term> terms(static_cast<std::size_t>(count));
+    std::vector<Index> offsets{0};
+    for (Index t = 0; t < count; ++t) {
+        Term& term = terms[static_cast<std::size_t>(t)];
+        Mat3 a;
         for (int i = 0; i < 9; ++i)
-            value.data()[i] = u(rng);
-        if (r == c)
-            value = 0.5 * (value + value.transpose()).eval();
-        coupling.entry(2 * p) = {r, c, r == c ? Block3(0.5 * value) : value};
-        coupling.entry(2 * p + 1) = {c, r, r == c ? Block3(0.5 * value) : Block3(value.transpose())};
+            a.data()[i] = u(rng);
+        term.k = a * a.transpose();
+        const auto shares = static_cast<int>(1 + rng() % 4);
+        for (int s = 0; s < shares; ++s)
+            term.shares.emplace_back(s == 1 && t % 5 == 0 ? term.shares[0].first : row(), u(rng));
+        offsets.push_back(offsets.back() + shares + (t % 6 == 0 ? 1 : 0));
+    }
+    ContactCoupling& coupling = scene.coupling();
+    coupling.reset(offsets);
+    for (Index t = 0; t < count; ++t) {
+        const Term& term = terms[static_cast<std::size_t>(t)];
+        coupling.stiffness(t) = term.k;
+        Index k = 0;
+        for (const auto& [r, c] : term.shares)
+            coupling.share(t, k++) = {r, r, c};
+        if (t % 6 == 0)
+            coupling.share(t, k) = {-1, row(), 0.0}; // a fixed node: no part in the matrix
     }
     coupling.finish(scene.chunks());
+    return terms;
 }
 
-// The whole scene matrix, every block, as an Eigen matrix.
-SparseMat assembled(const SceneMatrix& scene)
+// The whole scene matrix, every block, as an Eigen matrix: the bodies' blocks and c_r c_s K of
+// every pair of shares of every term.
+SparseMat assembled(const SceneMatrix& scene, const std::vector<Term>& terms)
 {
     std::vector<Eigen::Triplet<double, Index>> triplets;
     for (Index b = 0; b < scene.num_bodies(); ++b) {
@@ -74,12 +94,12 @@ SparseMat assembled(const SceneMatrix& scene)
             for (SparseMat::InnerIterator it(body, k); it; ++it)
                 triplets.emplace_back(3 * scene.offset(b) + it.row(), 3 * scene.offset(b) + it.col(), it.value());
     }
-    const CouplingBlocks& coupling = scene.coupling();
-    for (Index k = 0; k < coupling.size(); ++k)
-        for (int i = 0; i < 3; ++i)
-            for (int j = 0; j < 3; ++j)
-                triplets.emplace_back(3 * coupling.block(k).row + i, 3 * coupling.block(k).column + j,
-                                      coupling.block(k).value(i, j));
+    for (const Term& term : terms)
+        for (const auto& [r, cr] : term.shares)
+            for (const auto& [s, cs] : term.shares)
+                for (int i = 0; i < 3; ++i)
+                    for (int j = 0; j < 3; ++j)
+                        triplets.emplace_back(3 * r + i, 3 * s + j, cr * cs * term.k(i, j));
     SparseMat whole(scene.num_dofs(), scene.num_dofs());
     whole.setFromTriplets(triplets.begin(), triplets.end());
     return whole;
@@ -106,8 +126,7 @@ TEST(SceneMatrix, MultiplyMatchesTheAssembledMatrixWithCoupling)
 {
     Bodies bodies;
     SceneMatrix scene({&bodies.a, &bodies.b, &bodies.c});
-    random_coupling(scene, 5, 40);
-    const SparseMat whole = assembled(scene);
+    const SparseMat whole = assembled(scene, random_coupling(scene, 5, 40));
     EXPECT_NEAR(SparseMat(whole - SparseMat(whole.transpose())).norm(), 0.0, 1e-14);
     const VecX x = VecX::LinSpaced(scene.num_dofs(), -1.0, 1.5);
     VecX y(scene.num_dofs());
@@ -128,8 +147,7 @@ TEST(SceneMatrix, DiagonalBlocksIncludeTheCoupling)
 {
     Bodies bodies;
     SceneMatrix scene({&bodies.a, &bodies.b, &bodies.c});
-    random_coupling(scene, 6, 60);
-    const Eigen::MatrixXd whole = Eigen::MatrixXd(assembled(scene));
+    const Eigen::MatrixXd whole = Eigen::MatrixXd(assembled(scene, random_coupling(scene, 6, 60)));
     for (Index c = 0; c < scene.chunks().num_chunks(); ++c) {
         const Index begin = scene.chunks().offsets[static_cast<std::size_t>(c)];
         const Index end = scene.chunks().offsets[static_cast<std::size_t>(c) + 1];
@@ -137,16 +155,14 @@ TEST(SceneMatrix, DiagonalBlocksIncludeTheCoupling)
         scene.diagonal_blocks(c, blocks.data());
         for (Index r = begin; r < end; ++r)
             EXPECT_TRUE(test::is_near(blocks[static_cast<std::size_t>(r - begin)], whole.block<3, 3>(3 * r, 3 * r),
-                                      1e-15, 0.0))
+                                      1e-14, 1e-15))
                 << "row " << r;
     }
 }
 
 TEST(CouplingBlocks, SortsByRowAndColumnAndSumsRepeatsInContributionOrder)
 {
-    Bodies bodies;
-    SceneMatrix scene({&bodies.a, &bodies.b, &bodies.c});
-    CouplingBlocks& coupling = scene.coupling();
+    CouplingBlocks coupling;
     coupling.reset(5);
     const Block3 one = Block3::Constant(1.0), tiny = Block3::Constant(1e-17);
     coupling.entry(0) = {45, 2, one};
@@ -154,27 +170,45 @@ TEST(CouplingBlocks, SortsByRowAndColumnAndSumsRepeatsInContributionOrder)
     coupling.entry(2) = {45, 2, tiny};
     coupling.entry(3) = {45, 1, one};
     coupling.entry(4) = {45, 2, -one};
-    coupling.finish(scene.chunks());
+    coupling.finish(83);
     ASSERT_EQ(coupling.size(), 3);
     EXPECT_EQ(coupling.block(0).row, 3);
     EXPECT_EQ(coupling.block(1).column, 1);
     EXPECT_EQ(coupling.block(2).column, 2);
     // (1 + 1e-17) − 1 in this order is 0; any other order would leave 1e-17.
     EXPECT_EQ(coupling.block(2).value, Block3(Block3::Zero()));
-    // Row 3 lies in chunk 0, row 45 in chunk 3 (rows 41..64).
-    EXPECT_EQ(coupling.chunk_begin(0), 0);
-    EXPECT_EQ(coupling.chunk_begin(1), 1);
-    EXPECT_EQ(coupling.chunk_begin(3), 1);
-    EXPECT_EQ(coupling.chunk_begin(4), 3);
-    EXPECT_EQ(coupling.chunk_begin(6), 3);
+}
+
+TEST(ContactCoupling, ItsBlocksAreItsTermsWrittenOut)
+{
+    Bodies bodies;
+    SceneMatrix scene({&bodies.a, &bodies.b, &bodies.c});
+    const std::vector<Term> terms = random_coupling(scene, 9, 40);
+    CouplingBlocks blocks;
+    scene.coupling().blocks(scene.num_block_rows(), blocks);
+    std::vector<Eigen::Triplet<double, Index>> triplets;
+    for (Index k = 0; k < blocks.size(); ++k) {
+        const CouplingBlocks::Entry& e = blocks.block(k);
+        if (k > 0) {
+            const CouplingBlocks::Entry& before = blocks.block(k - 1);
+            EXPECT_LT(std::make_pair(before.row, before.column), std::make_pair(e.row, e.column));
+        }
+        for (int i = 0; i < 3; ++i)
+            for (int j = 0; j < 3; ++j)
+                triplets.emplace_back(3 * e.row + i, 3 * e.column + j, e.value(i, j));
+    }
+    SparseMat written(scene.num_dofs(), scene.num_dofs());
+    written.setFromTriplets(triplets.begin(), triplets.end());
+    SparseMat bodies_only = assembled(scene, {});
+    const SparseMat expected = assembled(scene, terms) - bodies_only;
+    EXPECT_LT(SparseMat(written - expected).norm(), 1e-13 * expected.norm());
 }
 
 TEST(SceneMatrix, PcgOverTheSceneSolvesTheCoupledSystem)
 {
     Bodies bodies;
     SceneMatrix scene({&bodies.a, &bodies.b, &bodies.c});
-    random_coupling(scene, 7, 30);
-    const SparseMat whole = assembled(scene);
+    const SparseMat whole = assembled(scene, random_coupling(scene, 7, 30));
     const VecX rhs = VecX::LinSpaced(scene.num_dofs(), -2.0, 1.0);
     const VecX direct = Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>>(whole).solve(rhs);
     for (const PcgPreconditioner kind : {PcgPreconditioner::JACOBI, PcgPreconditioner::BLOCK_JACOBI}) {
@@ -238,13 +272,15 @@ TEST(PcgSolver, EachComponentIteratesAsItsOwnSolveWould)
     // for bit, the solves of each component alone, and stops each at its own tolerance.
     Bodies bodies;
     const auto coupled = [&](SceneMatrix& scene, Index b_offset) {
-        CouplingBlocks& coupling = scene.coupling();
-        coupling.reset(4);
-        const Block3 block = Block3::Constant(0.3);
-        coupling.entry(0) = {b_offset + 7, b_offset + 50, block};
-        coupling.entry(1) = {b_offset + 50, b_offset + 7, Block3(block.transpose())};
-        coupling.entry(2) = {b_offset + 2, b_offset + 51, Block3(-block)};
-        coupling.entry(3) = {b_offset + 51, b_offset + 2, Block3(-block.transpose())};
+        // Springs between rows 7 and 50 and rows 2 and 51 of b and c.
+        ContactCoupling& coupling = scene.coupling();
+        coupling.reset({0, 2, 4});
+        coupling.stiffness(0) = Mat3::Constant(0.3);
+        coupling.share(0, 0) = {b_offset + 7, b_offset + 7, 1.0};
+        coupling.share(0, 1) = {b_offset + 50, b_offset + 50, -1.0};
+        coupling.stiffness(1) = Mat3::Identity();
+        coupling.share(1, 0) = {b_offset + 2, b_offset + 2, 0.5};
+        coupling.share(1, 1) = {b_offset + 51, b_offset + 51, -0.5};
         coupling.finish(scene.chunks());
     };
     SceneMatrix scene({&bodies.a, &bodies.b, &bodies.c});

@@ -37,17 +37,11 @@ struct ContactShare {
 
 /// What one contact adds to the step. With c_r the coefficients of its shares, block (r, s)
 /// of the matrix gets c_r c_s K (nothing where either node is fixed: those rows and columns
-/// are identity) and share r's node the force −c_r F.
+/// are identity; kept as one ContactCoupling term) and share r's node the force −c_r F.
 struct ContactTerms {
     Mat3 stiffness = Mat3::Zero(); ///< K: (h² k + h c_n) n nᵀ plus the friction term [kg]
     Vec3 force = Vec3::Zero();     ///< F = k g n on the penetrating side [N]
 
-    Block3 block(const ContactShare& row, const ContactShare& column) const
-    {
-        if (row.fixed || column.fixed)
-            return Block3::Zero();
-        return row.coefficient * column.coefficient * stiffness;
-    }
     Vec3 force_on(const ContactShare& share) const { return -share.coefficient * force; }
 };
 
@@ -106,19 +100,19 @@ void evaluate_contacts(const std::vector<ContactSurface>& surfaces, const std::v
                        ContactRecords& records);
 
 /// What contact adds to one implicit Euler step of the scene: explicit forces per body (into
-/// the caller's vectors, the scene's own), and the coupling blocks of the scene matrix.
+/// the caller's vectors, the scene's own), and the coupling terms of the scene matrix.
 class ContactResponse {
 public:
     /// Builds the response of every contact point, in parallel over the contacts; every
-    /// contact writes its own slots, which are then added in contact order, so forces and blocks
+    /// contact writes its own slots, which are then added in contact order, so forces and terms
     /// never depend on the thread count. Buffers are kept between calls (no allocation once they
     /// have held a step's contacts).
     /// @param[in] bodies    the scene's bodies (velocities and fixed nodes are read)
     /// @param[in] surfaces  surfaces of the bodies (same order), then of static obstacles
     /// @param[in] contacts  detection output (surfaces and plane obstacles, see ContactTarget)
     /// @param[in] dt        the step h [s]
-    /// @param[in,out] matrix  the scene matrix whose coupling() is refilled and finished;
-    ///                        blocks in rows or columns of fixed nodes are left out
+    /// @param[in,out] matrix  the scene matrix whose coupling() is refilled and finished (fixed
+    ///                        nodes take no part in it)
     /// @param[out] forces     per body, #3V: explicit contact forces at the step start
     ///                        (penalty) [N]; vectors already of the right size are reused
     void compute(const std::vector<Body>& bodies, const std::vector<ContactSurface>& surfaces,
@@ -126,7 +120,7 @@ public:
                  SceneMatrix& matrix, std::vector<VecX>& forces);
 
     /// Adds evaluated contacts to this process's rows, contact after contact in the records'
-    /// order: the forces on the nodes of its bodies, and the coupling blocks of their rows
+    /// order: the forces on the nodes of its bodies, and the coupling terms of their rows
     /// (compute() is evaluate_contacts() and this for one process).
     /// @param[in] records     the contacts, in the order one process holding every body adds them
     /// @param[in] bodies      this process's bodies (`forces` is sized by them)
@@ -134,16 +128,14 @@ public:
     ///                        process holds it (its rows are left out)
     /// @param[in] column      the column of a share's node in `matrix`: a row of a body here, or
     ///                        a ghost row after them (see scene_exchange.hpp)
-    /// @param[in] column_order  null, or the order of the columns (CouplingBlocks::finish)
     /// @param[in,out] matrix  its coupling() is refilled and finished
     /// @param[out] forces     per body here, #3V: the forces on its nodes [N]
     void apply(const ContactRecords& records, const std::vector<Body>& bodies,
                FunctionRef<Index(Index surface)> local_body, FunctionRef<Index(Index surface, Index node)> column,
-               const std::vector<Index>* column_order, SceneMatrix& matrix, std::vector<VecX>& forces);
+               SceneMatrix& matrix, std::vector<VecX>& forces);
 
 private:
     ContactRecords m_records;
-    std::vector<Index> m_block_offsets; // #contacts+1 into the coupling entries
     std::vector<Vec3> m_share_forces;   // force on each share's node, of the shares here [N]
 };
 

@@ -12,7 +12,7 @@
 /// answers bit for bit as the owner's would. The terms of every contact go, with the contact, to the owners of the nodes it
 /// touches, and each process adds those of its rows in the order of the contacts' keys (body,
 /// vertex, other) in the case's numbering: the order in which one process holding every body
-/// adds them. Forces, coupling blocks and the halo of the PCG are therefore those of one
+/// adds them. Forces, coupling terms and the halo of the PCG are therefore those of one
 /// process, bit for bit.
 ///
 /// The scene's surfaces are this process's: its bodies' (scene order), the obstacle meshes',
@@ -59,7 +59,7 @@ public:
     ///                       `other` in the case's numbering: bodies, then obstacle meshes, or
     ///                       a plane); contact_forces := the forces on its nodes
     /// @param[in,out] response  applied to this process's rows
-    /// @param[in,out] matrix    the scene matrix: its coupling blocks refilled, its components
+    /// @param[in,out] matrix    the scene matrix: its coupling terms refilled, its components
     ///                          those of the whole scene (contact_components of every box)
     /// @param[in,out] exchange  its halo set to the coupling's ghost rows, its components set
     Counts detect(Scene& scene, const ContactSettings& settings, double dt, ContactResponse& response,
@@ -97,7 +97,6 @@ private:
     std::vector<std::vector<Index>> m_rank_bodies; // per rank, its case bodies ascending
     std::vector<Index> m_components;       // case body → component of the whole scene
     std::vector<Index> m_local_components; // scene body → component of the whole scene
-    std::vector<Index> m_first_row;    // #N+1: first row of every case body in one process's numbering
     // Owner side, per scene body: the nodes its surface moves with, their start positions (the
     // surface and its tree were built from them), and whether each rank has its topology.
     std::vector<std::vector<Index>> m_surface_nodes;

@@ -32,7 +32,7 @@ public:
     SceneSystem(const SceneSystem&) = delete;
     SceneSystem& operator=(const SceneSystem&) = delete;
 
-    /// The scene matrix: the bodies' matrices and the contact coupling blocks, whose rows are
+    /// The scene matrix: the bodies' matrices and the contact coupling, whose rows are
     /// the scene rows of offset().
     SceneMatrix& matrix() { return m_matrix; }
     const SceneMatrix& matrix() const { return m_matrix; }
@@ -51,7 +51,7 @@ public:
     ///         non-finite right-hand side entry
     /// @param[in] gravity         acceleration [m/s²]
     /// @param[in] contact_forces  per body #3V explicit contact forces [N], or empty for none;
-    ///                            the coupling blocks are expected in matrix().coupling()
+    ///                            the coupling terms are expected in matrix().coupling()
     void assemble(double dt, const Vec3& gravity, const std::vector<VecX>& contact_forces);
 
     /// Set-ups and applications of the PCG's preconditioner so far (AMG; zero for the others).

@@ -135,7 +135,7 @@ public:
     /// @throws NumericalError prefixed with "step N (t = ...): " when the simulation diverges
     void step();
 
-    /// Recomputes the contact response of the current state (the forces and coupling blocks the
+    /// Recomputes the contact response of the current state (the forces and coupling terms the
     /// next step uses) from the current velocities, fixed nodes and contact settings: for a
     /// caller that changed them between steps. Detection is not repeated (positions have not
     /// moved); counters are not changed. Does nothing where contact does not apply

@@ -2,7 +2,7 @@
 /// @file amg_preconditioner.hpp
 /// @brief Algebraic multigrid for the scene PCG: PETSc's smoothed-aggregation GAMG with the
 /// rigid-body modes as near-null space (MatNullSpaceCreateRigidBody), built from the whole
-/// scene matrix (every body's blocks and the contact coupling blocks), its hierarchy reused over
+/// scene matrix (every body's blocks and the contact coupling written out as blocks), its hierarchy reused over
 /// steps while it stays effective.
 ///
 /// Why GAMG (tools/bench_amg.cpp, numbers in docs/solver.md): on the SOFA beam's implicit Euler

@@ -66,7 +66,7 @@ public:
 
     /// Solves A x = b for symmetric positive definite A, warm-started from the given x.
     /// @param[in] a       the scene matrix, #N×#N blocks, SPD (its coupling finished, every
-    ///                    coupling block within a component); with an exchange, this
+    ///                    coupling term within a component); with an exchange, this
     ///                    process's rows, coupling columns up to N + G
     /// @param[in] b       #3N right-hand side
     /// @param[in,out] x   #3N initial guess on entry, solution on exit

@@ -2,7 +2,7 @@
 /// @file rank_exchange.hpp
 /// @brief The SceneExchange of a scene whose bodies are spread over the processes of a
 /// Communicator: chunk sums gathered and added per component in the global chunk order, and
-/// the halo of the coupling blocks.
+/// the halo of the coupling terms.
 
 #include <corocontact/core/communicator.hpp>
 #include <corocontact/solver/scene_exchange.hpp>
@@ -39,7 +39,7 @@ public:
     /// K: components of the whole scene.
     Index num_components() const { return m_num_components; }
 
-    /// Sets the halo of the coupling blocks now in the matrix (until the next call).
+    /// Sets the halo of the coupling terms now in the matrix (until the next call).
     void set_halo(Halo halo);
     const Halo& halo() const { return m_halo; }
 

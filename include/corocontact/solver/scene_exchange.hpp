@@ -6,7 +6,7 @@
 /// machine: OpenMPI").
 ///
 /// A process holds the rows of its own bodies (the scene matrix's rows) followed by G ghost
-/// rows: rows of other processes' bodies that its contact coupling blocks read. Chunks are
+/// rows: rows of other processes' bodies that its contact coupling terms read. Chunks are
 /// defined by bodies, so the global chunk order (body order, then each body's chunks) is the
 /// same for any number of processes, and a sum formed in it gives the bits of one process.
 /// A one-process solve has no exchange and pays nothing for this interface.
@@ -20,7 +20,7 @@ public:
     virtual ~SceneExchange() = default;
 
     /// G: the ghost rows that follow the matrix's own rows in the vectors given to
-    /// update_ghosts() (coupling block columns ≥ #rows name them).
+    /// update_ghosts() (coupling columns ≥ #rows name them).
     virtual Index num_ghost_rows() const = 0;
 
     /// Writes the owners' current values into the ghost rows of x. Collective.

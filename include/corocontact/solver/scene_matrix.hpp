@@ -1,19 +1,19 @@
 #pragma once
 /// @file scene_matrix.hpp
 /// @brief The system matrix of a whole scene: every body's own matrix on the block diagonal
-/// (pattern built once, values refilled in place) plus the contact coupling blocks.
+/// (pattern built once, values refilled in place) plus the contact coupling.
 ///
 /// The rows (nodes) of body b are the scene rows [offset(b), offset(b) + #V_b). The row chunks
 /// are the product chunks of the body matrices in body order (a small body is one chunk, a
 /// large body its METIS parts and interface pieces), so every reduction over the scene sums
 /// per-body partials in a fixed order: results never depend on the thread count.
 ///
-/// The bodies fall into components: sets of bodies that coupling blocks may join (bodies whose
+/// The bodies fall into components: sets of bodies that the coupling may join (bodies whose
 /// boxes overlap). The matrix is block diagonal by component, so the scene PCG runs one
 /// recurrence per component, each stopping when its own residual is small enough.
 
 #include <corocontact/solver/bsr_matrix.hpp>
-#include <corocontact/solver/coupling_blocks.hpp>
+#include <corocontact/solver/contact_coupling.hpp>
 #include <corocontact/solver/row_chunks.hpp>
 
 #include <vector>
@@ -56,7 +56,7 @@ public:
         return m_positions.empty() ? nullptr : m_positions[static_cast<std::size_t>(body)];
     }
     /// Components: component_of_body[b] for every body, numbered 0, 1, … in the order of each
-    /// component's first body. Every coupling block must join bodies of one component.
+    /// component's first body. Every coupling term must join bodies of one component.
     /// @throws std::invalid_argument if the numbering is not of that form
     void set_components(const std::vector<Index>& component_of_body);
     /// Components of a distributed scene (scene_exchange.hpp): component_of_body[b] for every
@@ -68,9 +68,9 @@ public:
     /// The component of chunk c.
     Index chunk_component(Index chunk) const { return m_chunk_component[static_cast<std::size_t>(chunk)]; }
 
-    /// The contact coupling blocks (scene rows); call coupling().finish(chunks()) after filling.
-    CouplingBlocks& coupling() { return m_coupling; }
-    const CouplingBlocks& coupling() const { return m_coupling; }
+    /// The contact coupling (scene rows); call coupling().finish(chunks()) after filling.
+    ContactCoupling& coupling() { return m_coupling; }
+    const ContactCoupling& coupling() const { return m_coupling; }
 
     /// y = A x, and for every chunk c the partial dot product Σ_{i in c} x_i y_i in
     /// `chunk_dots[c]` (the caller adds them in chunk order).
@@ -97,7 +97,7 @@ private:
     bool m_any_gathers = false;         // some body has blocks reaching across its chunks
     Index m_num_components = 0;
     std::vector<Index> m_chunk_component; // #chunks
-    CouplingBlocks m_coupling;
+    ContactCoupling m_coupling;
 };
 
 } // namespace coro
