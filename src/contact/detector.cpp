@@ -78,13 +78,27 @@ const std::vector<PairCandidates>& pair_candidates(const std::vector<ContactSurf
                                                    detail::DetectionState& state)
 {
     const auto box = [&](Index s) { return surfaces[static_cast<std::size_t>(s)].tree.bounds(); };
-    // Both directions of each pair, ordered by (body, other).
-    state.directed.clear();
+    // Both directions of each pair, ordered by (body, other): a counting sort by body, in which
+    // a body's pairs with lower others (the pairs (other, body), ascending) precede its pairs
+    // (body, other), ascending.
+    std::vector<Index>& next = state.directed_offsets;
+    next.assign(surfaces.size() + 1, 0);
     for (const auto& [a, b] : state.pairs) {
-        state.directed.emplace_back(a, b);
-        state.directed.emplace_back(b, a);
+        ++next[static_cast<std::size_t>(a) + 1];
+        ++next[static_cast<std::size_t>(b) + 1];
     }
-    std::sort(state.directed.begin(), state.directed.end());
+    for (std::size_t s = 0; s < surfaces.size(); ++s)
+        next[s + 1] += next[s];
+    state.directed.resize(2 * state.pairs.size());
+    state.pair_of.resize(2 * state.pairs.size());
+    for (const bool lower_first : {true, false})
+        for (std::size_t j = 0; j < state.pairs.size(); ++j) {
+            const auto [a, b] = state.pairs[j];
+            const auto at = static_cast<std::size_t>(next[static_cast<std::size_t>(lower_first ? b : a)]++);
+            state.directed[at] = lower_first ? std::make_pair(b, a) : std::make_pair(a, b);
+            state.pair_of[at] = j;
+        }
+    CORO_ASSERT(std::is_sorted(state.directed.begin(), state.directed.end()));
     std::vector<PairCandidates>& candidates = state.candidates.assign(state.directed);
     for (std::size_t k = 0; k < candidates.size(); ++k)
         std::tie(candidates[k].body, candidates[k].other) = state.directed[k];
@@ -131,7 +145,7 @@ const std::vector<PairCandidates>& find_candidates(const std::vector<ContactSurf
 Index drop_candidates_outside_hulls(const std::vector<ContactSurface>& surfaces, detail::DetectionState& state)
 {
     std::vector<PairCandidates>& candidates = state.candidates.items();
-    const std::vector<std::size_t>& pair_of = state.grouping.slot_pairs_of;
+    const std::vector<std::size_t>& pair_of = state.pair_of;
     const std::vector<detail::PairSlots>& slot_pairs = state.slot_pairs.items();
     const auto filtered = [&](std::size_t k) {
         const PairCandidates& c = candidates[k];
@@ -193,13 +207,14 @@ void detect_pairs(const std::vector<ContactSurface>& surfaces, const DetectionSe
 
     // Which pairs are grouped depends on their candidates: the mid phase comes first.
     const std::vector<PairCandidates>& candidates = pair_candidates(surfaces, settings.mode, state);
-    detail::overlapping_slot_pairs(surfaces, state.pairs, candidates, state.grouping, state.slot_pairs);
+    detail::overlapping_slot_pairs(surfaces, state.pairs, candidates, state.pair_of, state.grouping, state.slot_pairs);
     const Index by_hull = drop_candidates_outside_hulls(surfaces, state);
     // Each pair's answers are taken in its own task, as they come; with depth searches to do,
     // its blocks are nested tasks.
     DetectionPass pass(surfaces, candidates, settings.contact_data, state);
     detail::grouped_inside_tests(
-        surfaces, candidates, state.slot_pairs.items(), settings.tolerances, settings.contact_data, state.grouping,
+        surfaces, candidates, state.pair_of, state.slot_pairs.items(), settings.tolerances, settings.contact_data,
+        state.grouping,
         [&](std::size_t k, const detail::GroupedAnswers& answers) {
             const auto n = static_cast<Index>(answers.group.size());
             const Index blocks = (n + VERTEX_BLOCK - 1) / VERTEX_BLOCK;

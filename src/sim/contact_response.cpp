@@ -141,7 +141,7 @@ void ContactResponse::apply(const ContactRecords& records, const std::vector<Bod
         if (body >= 0)
             forces[at(body)].segment<3>(3 * share.node) += m_share_forces[s];
     }
-    coupling.finish(matrix.chunks());
+    coupling.finish();
 }
 
 } // namespace coro

@@ -11,6 +11,15 @@ std::size_t at(Index i) { return static_cast<std::size_t>(i); }
 bool has_blocks(const ContactCoupling::Share& share) { return share.row >= 0 && share.coefficient != 0.0; }
 } // namespace
 
+void ContactCoupling::set_chunks(const RowChunks& chunks)
+{
+    m_num_chunks = chunks.num_chunks();
+    m_row_chunk.resize(at(chunks.num_rows()));
+    for (Index c = 0; c < m_num_chunks; ++c)
+        std::fill(m_row_chunk.begin() + chunks.offsets[at(c)], m_row_chunk.begin() + chunks.offsets[at(c) + 1], c);
+    m_chunk_offsets.assign(at(m_num_chunks) + 1, 0);
+}
+
 void ContactCoupling::reset(const std::vector<Index>& share_offsets)
 {
     const std::size_t terms = share_offsets.size() - 1;
@@ -25,14 +34,11 @@ void ContactCoupling::reset(const std::vector<Index>& share_offsets)
     m_shares.resize(at(m_share_offsets.back()));
 }
 
-void ContactCoupling::finish(const RowChunks& chunks)
+void ContactCoupling::finish()
 {
-    const auto chunk_of = [&](Index row) {
-        return static_cast<Index>(std::upper_bound(chunks.offsets.begin(), chunks.offsets.end(), row) -
-                                  chunks.offsets.begin()) - 1;
-    };
+    const auto chunk_of = [&](Index row) { return m_row_chunk[at(row)]; };
     // Fill up the last group of every term; count the shares with a row by chunk.
-    const Index n_chunks = chunks.num_chunks();
+    const Index n_chunks = m_num_chunks;
     m_fill.assign(at(n_chunks) + 1, 0);
     for (Index term = 0; term < num_terms(); ++term) {
         const Index first = m_share_offsets[at(term)], written = first + m_share_counts[at(term)];

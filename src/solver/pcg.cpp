@@ -55,6 +55,14 @@ void PcgSolver::mark_active_chunks(const SceneMatrix& a)
         m_chunk_active[at(c)] = m_components[at(a.chunk_component(c))].active ? 1 : 0;
 }
 
+void PcgSolver::copy_rows(const SceneMatrix& a, const double* from, double* to)
+{
+    for_each_chunk(a.chunks(), [&](Index, Index row_begin, Index row_end) {
+        std::copy(from + 3 * static_cast<std::ptrdiff_t>(row_begin), from + 3 * static_cast<std::ptrdiff_t>(row_end),
+                  to + 3 * static_cast<std::ptrdiff_t>(row_begin));
+    });
+}
+
 void PcgSolver::multiply(const SceneMatrix& a, double* x, double* y, double* chunk_dots)
 {
     if (m_exchange)
@@ -168,7 +176,7 @@ PcgResult PcgSolver::solve(const SceneMatrix& a, CRef<VecX> b, Eigen::Ref<VecX> 
 
     // r = b − A x, z = M⁻¹ r, p = z.
     mark_active_chunks(a);
-    m_p.head(n) = x; // x has no ghost rows: multiply a copy that has
+    copy_rows(a, x.data(), m_p.data()); // x has no ghost rows: multiply a copy that has
     multiply(a, m_p.data(), m_r.data(), nullptr);
     residual_pass(a, b.data(), x.data());
     sum_by_component(a, m_partials, 2, false);
@@ -184,7 +192,7 @@ PcgResult PcgSolver::solve(const SceneMatrix& a, CRef<VecX> b, Eigen::Ref<VecX> 
         component.rz = rz;
         component.active = component.r_norm > stop * component.b_norm && settings.max_iterations > 0;
     }
-    m_p.head(n) = m_z;
+    copy_rows(a, m_z.data(), m_p.data());
 
     for (;;) {
         mark_active_chunks(a);

@@ -31,7 +31,8 @@ SceneMatrix::SceneMatrix(std::vector<const BsrMatrix*> bodies) : m_bodies(std::m
         m_offsets.push_back(m_offsets.back() + matrix.num_block_rows());
     }
     m_chunks.group_tasks(SCENE_TASK_ROWS);
-    m_coupling.finish(m_chunks);
+    m_coupling.set_chunks(m_chunks);
+    m_coupling.finish();
     m_chunk_component = m_chunk_body;
     m_num_components = num_bodies();
 }

@@ -117,7 +117,7 @@ struct TiedPair {
             coupling.share(term, 0) = {i, i, 1.0};
             coupling.share(term, 1) = {j, j, -1.0};
         }
-        coupling.finish(scene.chunks());
+        coupling.finish();
         b.resize(scene.num_dofs());
         b << left.b, right.b;
     }

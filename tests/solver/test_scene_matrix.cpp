@@ -79,7 +79,7 @@ std::vector<Term> random_coupling(SceneMatrix& scene, unsigned seed, Index count
         if (t % 6 == 0)
             coupling.share(t, k) = {-1, row(), 0.0}; // a fixed node: no part in the matrix
     }
-    coupling.finish(scene.chunks());
+    coupling.finish();
     return terms;
 }
 
@@ -281,7 +281,7 @@ TEST(PcgSolver, EachComponentIteratesAsItsOwnSolveWould)
         coupling.stiffness(1) = Mat3::Identity();
         coupling.share(1, 0) = {b_offset + 2, b_offset + 2, 0.5};
         coupling.share(1, 1) = {b_offset + 51, b_offset + 51, -0.5};
-        coupling.finish(scene.chunks());
+        coupling.finish();
     };
     SceneMatrix scene({&bodies.a, &bodies.b, &bodies.c});
     scene.set_components({0, 1, 1});

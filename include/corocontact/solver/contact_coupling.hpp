@@ -18,6 +18,10 @@ namespace coro {
 
 class ContactCoupling {
 public:
+    /// The row chunks the terms will be indexed by (those of the scene matrix, fixed with it);
+    /// before any reset().
+    void set_chunks(const RowChunks& chunks);
+
     /// One node of a term.
     struct Share {
         Index row = -1;           ///< its row of the scene matrix, −1 if it has none here (another
@@ -42,7 +46,7 @@ public:
     /// Indexes the written terms by the chunks' rows: a chunk's terms in term order, so a row
     /// sums its terms in term order (which one process and many processes share). Must be
     /// called after the terms are written and before any other query; O(#chunks + #shares).
-    void finish(const RowChunks& chunks);
+    void finish();
 
     Index num_terms() const { return static_cast<Index>(m_stiffness.size()); }
 
@@ -77,9 +81,11 @@ private:
     std::vector<Index> m_share_offsets{0}; // #terms+1, multiples of SHARE_GROUP
     std::vector<Index> m_share_counts;     // #terms: shares written, before the filling
     std::vector<Share> m_shares;
+    std::vector<Index> m_row_chunk;           // #rows: the chunk of every row
     std::vector<RowTerm> m_row_terms;         // finish(): every share with a row, by (chunk, term)
     std::vector<Index> m_chunk_offsets{0, 0}; // finish(): chunk c's row terms [c], [c+1)
     std::vector<Index> m_fill;                // finish(): scratch, #chunks+1
+    Index m_num_chunks = 0;
 };
 
 } // namespace coro

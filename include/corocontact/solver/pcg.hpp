@@ -110,6 +110,8 @@ private:
     void sum_by_component(const SceneMatrix& a, const std::vector<double>& partials, int width, bool all);
     /// The chunk flags of the active components.
     void mark_active_chunks(const SceneMatrix& a);
+    /// to = from over the scene's rows (#3N), in parallel.
+    void copy_rows(const SceneMatrix& a, const double* from, double* to);
     /// y = A x over the active chunks; with an exchange, x's ghost rows are updated first.
     void multiply(const SceneMatrix& a, double* x, double* y, double* chunk_dots);
 

@@ -68,7 +68,8 @@ public:
     /// The component of chunk c.
     Index chunk_component(Index chunk) const { return m_chunk_component[static_cast<std::size_t>(chunk)]; }
 
-    /// The contact coupling (scene rows); call coupling().finish(chunks()) after filling.
+    /// The contact coupling (scene rows, indexed by chunks()); call coupling().finish() after
+    /// filling.
     ContactCoupling& coupling() { return m_coupling; }
     const ContactCoupling& coupling() const { return m_coupling; }
 

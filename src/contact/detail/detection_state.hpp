@@ -45,6 +45,8 @@ public:
     std::vector<Index> sweep_order;            ///< overlapping_pairs()' working memory
     std::vector<std::pair<Index, Index>> pairs; ///< the overlapping surfaces (body < other)
     std::vector<std::pair<Index, Index>> directed; ///< both directions of each pair, ascending
+    std::vector<std::size_t> pair_of;          ///< per entry of `directed`: the index of its pair
+    std::vector<Index> directed_offsets;       ///< pair_candidates()' working memory
     PairBuffers<PairCandidates> candidates;    ///< per entry of `directed`
     tbb::enumerable_thread_specific<std::vector<Index>> overlapping_faces; ///< per thread (paper mode)
     PairBuffers<PairSlots> slot_pairs;         ///< per entry of `pairs`: overlapping_slot_pairs()

@@ -10,7 +10,6 @@
 
 #include <algorithm>
 #include <functional>
-#include <tuple>
 
 namespace coro::detail {
 
@@ -19,38 +18,14 @@ namespace {
 // Tested vertices per task.
 constexpr std::size_t TEST_BLOCK = 256;
 
-// For each entry of `candidates` (both directions of each pair, ordered by (body, other)), the
-// index of its pair: those with body < other come in the order of their pairs, the other
-// direction takes the index of its reverse.
-void pair_index_of(const std::vector<PairCandidates>& candidates, std::vector<std::size_t>& pair_of)
-{
-    pair_of.resize(candidates.size());
-    std::size_t lower = 0;
-    for (std::size_t k = 0; k < candidates.size(); ++k)
-        if (candidates[k].body < candidates[k].other)
-            pair_of[k] = lower++;
-    for (std::size_t k = 0; k < candidates.size(); ++k) {
-        const PairCandidates& pair = candidates[k];
-        if (pair.body < pair.other)
-            continue;
-        const auto reverse = std::lower_bound(candidates.begin(), candidates.end(), pair,
-                                              [](const PairCandidates& x, const PairCandidates& y) {
-                                                  return std::tie(x.body, x.other) < std::tie(y.other, y.body);
-                                              });
-        CORO_ASSERT(reverse != candidates.end() && reverse->body == pair.other && reverse->other == pair.body);
-        pair_of[k] = pair_of[static_cast<std::size_t>(reverse - candidates.begin())];
-    }
-}
-
 } // namespace
 
 void overlapping_slot_pairs(const std::vector<ContactSurface>& surfaces,
                             const std::vector<std::pair<Index, Index>>& pairs,
-                            const std::vector<PairCandidates>& candidates, GroupingScratch& scratch,
-                            PairBuffers<PairSlots>& slot_pairs)
+                            const std::vector<PairCandidates>& candidates, const std::vector<std::size_t>& pair_of,
+                            GroupingScratch& scratch, PairBuffers<PairSlots>& slot_pairs)
 {
-    std::vector<std::size_t>& pair_of = scratch.slot_pairs_of;
-    pair_index_of(candidates, pair_of);
+    CORO_ASSERT(pair_of.size() == candidates.size());
     std::vector<std::size_t>& count = scratch.pair_candidates;
     count.assign(pairs.size(), 0);
     for (std::size_t k = 0; k < candidates.size(); ++k)
@@ -76,14 +51,13 @@ void overlapping_slot_pairs(const std::vector<ContactSurface>& surfaces,
 }
 
 void grouped_inside_tests(const std::vector<ContactSurface>& surfaces, const std::vector<PairCandidates>& candidates,
-                          const std::vector<PairSlots>& slot_pairs, const AxisRayTolerances& tolerances,
+                          const std::vector<std::size_t>& pair_of, const std::vector<PairSlots>& slot_pairs,
+                          const AxisRayTolerances& tolerances,
                           bool distance_bounds, GroupingScratch& scratch,
                           const std::function<void(std::size_t pair, const GroupedAnswers& answers)>& use)
 {
     const std::size_t pairs = candidates.size();
-    // The face pairs of each k: those of its pair (as overlapping_slot_pairs() indexed them),
-    // columns swapped for body > other.
-    const std::vector<std::size_t>& pair_of = scratch.slot_pairs_of;
+    // The face pairs of each k: those of its pair, columns swapped for body > other.
     CORO_ASSERT(pair_of.size() == pairs);
     // Per pair, in one task: the groups, the tests of their first vertices (blocks of them as
     // nested tasks when there are many) and their use, where the rest of each group take them.

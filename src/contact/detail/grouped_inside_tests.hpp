@@ -47,7 +47,6 @@ struct GroupingScratch {
     tbb::enumerable_thread_specific<GroupScratch> groups; ///< per thread, for clear_edge_groups()
     std::vector<std::pair<Index, Index>> keys;            ///< per pair of candidates: (body, other)
     PairBuffers<GroupedAnswers> answers;                  ///< per pair of candidates
-    std::vector<std::size_t> slot_pairs_of;               ///< per pair of candidates: its pair's index
     std::vector<std::size_t> pair_candidates;             ///< per pair: candidates of both directions
 };
 
@@ -55,11 +54,12 @@ struct GroupingScratch {
 /// directions of `candidates`) and a closed surface: grouped, with overlapping_slots() of a's tree
 /// and b's over the overlap of their boxes. Else not grouped. As TBB tasks.
 /// @param[in] candidates   pair_candidates() of `pairs`: both directions, ordered by (body, other)
+/// @param[in] pair_of      per entry of `candidates`: the index of its pair in `pairs`
 /// @param[out] slot_pairs  one per pair
 void overlapping_slot_pairs(const std::vector<ContactSurface>& surfaces,
                             const std::vector<std::pair<Index, Index>>& pairs,
-                            const std::vector<PairCandidates>& candidates, GroupingScratch& scratch,
-                            PairBuffers<PairSlots>& slot_pairs);
+                            const std::vector<PairCandidates>& candidates, const std::vector<std::size_t>& pair_of,
+                            GroupingScratch& scratch, PairBuffers<PairSlots>& slot_pairs);
 
 /// Exact-mode answers for every candidate vertex, handed over pair by pair: use(k, answers) for
 /// candidates[k].vertices, called once per pair from that pair's TBB task (pairs run in parallel;
@@ -67,10 +67,12 @@ void overlapping_slot_pairs(const std::vector<ContactSurface>& surfaces,
 /// candidates of a pair are grouped by clear_edge_groups() and only the first of each group is tested; the others share
 /// its answer, with shared_distance_bound() as theirs. Else every candidate is tested. The tests
 /// of a pair with many groups run in nested tasks; the answers do not depend on the scheduling.
+/// @param[in] pair_of     per entry of `candidates`: the index of its pair in `slot_pairs`
 /// @param[in] slot_pairs  overlapping_slot_pairs() of the pairs (body < other) of `candidates`,
 ///                        in their order, called with the same `candidates` and `scratch`
 void grouped_inside_tests(const std::vector<ContactSurface>& surfaces, const std::vector<PairCandidates>& candidates,
-                          const std::vector<PairSlots>& slot_pairs, const AxisRayTolerances& tolerances,
+                          const std::vector<std::size_t>& pair_of, const std::vector<PairSlots>& slot_pairs,
+                          const AxisRayTolerances& tolerances,
                           bool distance_bounds, GroupingScratch& scratch,
                           const std::function<void(std::size_t pair, const GroupedAnswers& answers)>& use);
 
