@@ -1,15 +1,15 @@
 // bench_scene: what a many-body scene costs against one body of the same size, in one run.
 //
-//   bench_scene PILE.toml [--steps 100] [--warmup 0] [--threads 1,2] [--iterations 20] [--repeat 1]
+//   bench_scene PILE.toml [--steps 100] [--warmup 0] [--threads 1,2] [--iterations 20] [--turn 10]
 //
 // Runs the case's bodies, and one box of the same tet count (the first body's material, resting
 // on the case's plane obstacles) with the same solver and contact settings, for each thread
 // count, with contact on and off. The work per step is fixed: every solve runs exactly
 // --iterations PCG iterations. Each run first takes --warmup steps untimed (a pile falls into
 // contact), then times --steps steps. Prints milliseconds per step and per phase, the pile/box
-// ratios, the contact phase's share and the 1 → N thread speed-ups. With --repeat R, pile and box
-// alternate R times and each keeps its fastest run (on a shared machine the least disturbed one);
-// the range of the R pile/box ratios is printed beside the ratio of the fastest runs.
+// ratios, the contact phase's share and the 1 → N thread speed-ups. Pile and box live side by side
+// and take turns of --turn steps, so a slow spell of a shared machine slows both: the ratio of
+// their times is printed with the median and middle half of the ratios of single turns.
 
 #include <corocontact/core/error.hpp>
 #include <corocontact/io/case_reader.hpp>
@@ -61,31 +61,78 @@ coro::CaseSpec box_like(const coro::CaseSpec& pile, coro::Index tets)
     return box;
 }
 
-Measurement measure(const coro::CaseSpec& spec, coro::Index warmup, coro::Index steps, int threads)
+// A running simulation and its summary when the timed steps began.
+struct Timed {
+    coro::LoadedScene loaded;
+    coro::Simulation simulation;
+    coro::RunSummary before;
+
+    explicit Timed(const coro::CaseSpec& spec) : loaded(coro::load_scene(spec)), simulation(loaded.scene, spec)
+    {
+        simulation.start();
+    }
+
+    // Runs `steps` steps; returns their wall time in seconds.
+    double run(coro::Index steps)
+    {
+        const double wall = simulation.summary().wall_s;
+        for (coro::Index step = 0; step < steps; ++step)
+            simulation.step();
+        return simulation.summary().wall_s - wall;
+    }
+
+    Measurement measurement(coro::Index steps) const
+    {
+        const coro::RunSummary after = simulation.summary();
+        Measurement m;
+        const double per_step = 1000.0 / static_cast<double>(steps);
+        m.ms_per_step = (after.wall_s - before.wall_s) * per_step;
+        m.ms_per_phase.rotation = (after.phases.rotation - before.phases.rotation) * per_step;
+        m.ms_per_phase.assembly = (after.phases.assembly - before.phases.assembly) * per_step;
+        m.ms_per_phase.solve = (after.phases.solve - before.phases.solve) * per_step;
+        m.ms_per_phase.contact = (after.phases.contact - before.phases.contact) * per_step;
+        // Inside vertices per detection over the timed steps (the summary keeps their mean).
+        m.contacts_per_step = (after.contacts_mean * after.detections - before.contacts_mean * before.detections) /
+                              std::max<double>(1.0, static_cast<double>(after.detections - before.detections));
+        m.bodies = static_cast<coro::Index>(loaded.scene.bodies.size());
+        m.tets = loaded.scene.num_tets();
+        return m;
+    }
+};
+
+struct Pair {
+    Measurement pile, box;
+    std::vector<double> turn_ratios; // pile / box of each turn
+};
+
+// Pile and box in alternating turns of `turn` steps each, so that a slow spell of a shared host
+// falls on both: their ratio measures the code, not the moment.
+Pair measure_pair(const coro::CaseSpec& pile_spec, const coro::CaseSpec& box_spec, coro::Index warmup,
+                  coro::Index steps, coro::Index turn, int threads)
 {
     tbb::global_control control(tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(threads));
-    coro::LoadedScene loaded = coro::load_scene(spec);
-    coro::Simulation simulation(loaded.scene, spec);
-    simulation.start();
-    for (coro::Index step = 0; step < warmup; ++step)
-        simulation.step();
-    const coro::RunSummary before = simulation.summary();
-    for (coro::Index step = 0; step < steps; ++step)
-        simulation.step();
-    const coro::RunSummary after = simulation.summary();
-    Measurement m;
-    const double per_step = 1000.0 / static_cast<double>(steps);
-    m.ms_per_step = (after.wall_s - before.wall_s) * per_step;
-    m.ms_per_phase.rotation = (after.phases.rotation - before.phases.rotation) * per_step;
-    m.ms_per_phase.assembly = (after.phases.assembly - before.phases.assembly) * per_step;
-    m.ms_per_phase.solve = (after.phases.solve - before.phases.solve) * per_step;
-    m.ms_per_phase.contact = (after.phases.contact - before.phases.contact) * per_step;
-    // Inside vertices per detection over the timed steps (the summary keeps their mean).
-    m.contacts_per_step = (after.contacts_mean * after.detections - before.contacts_mean * before.detections) /
-                          std::max<double>(1.0, static_cast<double>(after.detections - before.detections));
-    m.bodies = static_cast<coro::Index>(loaded.scene.bodies.size());
-    m.tets = loaded.scene.num_tets();
-    return m;
+    Timed pile(pile_spec), box(box_spec);
+    pile.run(warmup);
+    box.run(warmup);
+    pile.before = pile.simulation.summary();
+    box.before = box.simulation.summary();
+    Pair pair;
+    for (coro::Index done = 0; done < steps; done += turn) {
+        const coro::Index n = std::min(turn, steps - done);
+        const double pile_s = pile.run(n);
+        pair.turn_ratios.push_back(pile_s / box.run(n));
+    }
+    pair.pile = pile.measurement(steps);
+    pair.box = box.measurement(steps);
+    return pair;
+}
+
+// The q-quantile (0 <= q <= 1) of `values`, by the nearest rank.
+double quantile(std::vector<double> values, double q)
+{
+    const auto k = static_cast<std::size_t>(std::lround(q * static_cast<double>(values.size() - 1)));
+    std::nth_element(values.begin(), values.begin() + static_cast<std::ptrdiff_t>(k), values.end());
+    return values[k];
 }
 
 std::vector<int> parse_threads(const std::string& list)
@@ -109,14 +156,14 @@ int main(int argc, char** argv)
 {
     CLI::App app{"bench_scene: a many-body case against one box of the same tet count, in one run"};
     std::string case_file, thread_list = "1,2";
-    int steps = 100, warmup = 0, iterations = 20, repeat = 1;
+    int steps = 100, warmup = 0, iterations = 20, turn = 10;
     app.add_option("case", case_file, "pile case file (e.g. from cases/pile_large/make_pile_large.py)")->required();
-    app.add_option("--steps", steps, "time steps per measurement")->check(CLI::Range(1, 1000000));
+    app.add_option("--steps", steps, "timed steps of each scene")->check(CLI::Range(1, 1000000));
     app.add_option("--warmup", warmup, "untimed steps before the timed ones")->check(CLI::Range(0, 1000000));
     app.add_option("--threads", thread_list, "comma-separated thread counts, the first is the reference");
     app.add_option("--iterations", iterations, "PCG iterations per solve (fixed work)")->check(CLI::Range(1, 100000));
-    app.add_option("--repeat", repeat, "runs of pile and box, alternating; each keeps its fastest")
-        ->check(CLI::Range(1, 100));
+    app.add_option("--turn", turn, "steps of a turn: pile and box alternate turn by turn")
+        ->check(CLI::Range(1, 1000000));
     CLI11_PARSE(app, argc, argv);
 
     try {
@@ -126,8 +173,7 @@ int main(int argc, char** argv)
         pile.solver.tolerance = 1e-300; // never reached: every solve runs the cap
         std::printf("%-10s %-8s %7s %7s %6s %9s %9s %9s %9s %9s %9s\n", "scene", "contact", "threads", "bodies",
                     "tets", "ms/step", "rotation", "assembly", "solve", "contact", "inside");
-        std::map<std::pair<bool, int>, std::pair<Measurement, Measurement>> results; // (contact, threads)
-        std::map<std::pair<bool, int>, std::pair<double, double>> ratio_range;          // of the repeats
+        std::map<std::pair<bool, int>, Pair> results; // (contact, threads)
         for (const bool contact : {true, false}) {
             pile.contact.enabled = contact;
             coro::Index tets = 0;
@@ -137,44 +183,30 @@ int main(int argc, char** argv)
             }
             const coro::CaseSpec box = box_like(pile, tets);
             for (const int n : threads) {
-                Measurement a, b;
-                double lowest = INFINITY, highest = 0.0;
-                for (int r = 0; r < repeat; ++r) {
-                    const Measurement pile_run = measure(pile, warmup, steps, n), box_run = measure(box, warmup, steps, n);
-                    if (r == 0 || pile_run.ms_per_step < a.ms_per_step)
-                        a = pile_run;
-                    if (r == 0 || box_run.ms_per_step < b.ms_per_step)
-                        b = box_run;
-                    const double ratio = pile_run.ms_per_step / box_run.ms_per_step;
-                    lowest = std::min(lowest, ratio);
-                    highest = std::max(highest, ratio);
-                }
-                results[{contact, n}] = {a, b};
-                ratio_range[{contact, n}] = {lowest, highest};
-                for (const auto& [name, m] : {std::pair<const char*, const Measurement&>{"pile", a}, {"box", b}})
+                const Pair& pair = results[{contact, n}] = measure_pair(pile, box, warmup, steps, turn, n);
+                for (const auto& [name, m] : {std::pair<const char*, const Measurement&>{"pile", pair.pile}, {"box", pair.box}})
                     std::printf("%-10s %-8s %7d %7d %6d %9.3f %9.3f %9.3f %9.3f %9.3f %9.1f\n", name,
                                 contact ? "on" : "off", n, static_cast<int>(m.bodies), static_cast<int>(m.tets),
                                 m.ms_per_step, m.ms_per_phase.rotation, m.ms_per_phase.assembly,
                                 m.ms_per_phase.solve, m.ms_per_phase.contact, m.contacts_per_step);
             }
         }
-        std::printf("\nratios (pile / box, same threads%s) and speed-ups (%d thread%s -> n):\n",
-                    repeat > 1 ? ", fastest of each" : "", threads.front(), threads.front() == 1 ? "" : "s");
+        std::printf("\nratios (pile / box, same threads, in turns of %d steps: all steps; the turns' median and "
+                    "middle half) and speed-ups (%d thread%s -> n):\n",
+                    turn, threads.front(), threads.front() == 1 ? "" : "s");
         for (const bool contact : {true, false})
             for (const int n : threads) {
-                const auto& [pile_m, box_m] = results[{contact, n}];
-                const auto& [pile_ref, box_ref] = results[{contact, threads.front()}];
-                const double pile_speedup = pile_ref.ms_per_step / pile_m.ms_per_step;
-                const double box_speedup = box_ref.ms_per_step / box_m.ms_per_step;
-                const auto [lowest, highest] = ratio_range[{contact, n}];
-                char range[64] = "";
-                if (repeat > 1)
-                    std::snprintf(range, sizeof range, " (runs %.2f-%.2f)", lowest, highest);
-                std::printf("  contact %-3s threads %d: pile/box %.2f%s, contact share pile %.0f%% box %.0f%%, "
-                            "speed-up pile %.2f box %.2f (pile/box %.2f)\n",
-                            contact ? "on" : "off", n, pile_m.ms_per_step / box_m.ms_per_step, range,
-                            100.0 * pile_m.ms_per_phase.contact / pile_m.ms_per_step,
-                            100.0 * box_m.ms_per_phase.contact / box_m.ms_per_step, pile_speedup, box_speedup,
+                const Pair& pair = results[{contact, n}];
+                const Pair& ref = results[{contact, threads.front()}];
+                const double pile_speedup = ref.pile.ms_per_step / pair.pile.ms_per_step;
+                const double box_speedup = ref.box.ms_per_step / pair.box.ms_per_step;
+                const std::vector<double>& turns = pair.turn_ratios;
+                std::printf("  contact %-3s threads %d: pile/box %.2f (turns %.2f, %.2f-%.2f), contact share pile "
+                            "%.0f%% box %.0f%%, speed-up pile %.2f box %.2f (pile/box %.2f)\n",
+                            contact ? "on" : "off", n, pair.pile.ms_per_step / pair.box.ms_per_step,
+                            quantile(turns, 0.5), quantile(turns, 0.25), quantile(turns, 0.75),
+                            100.0 * pair.pile.ms_per_phase.contact / pair.pile.ms_per_step,
+                            100.0 * pair.box.ms_per_phase.contact / pair.box.ms_per_step, pile_speedup, box_speedup,
                             pile_speedup / box_speedup);
             }
     } catch (const std::exception& error) {
