@@ -164,7 +164,11 @@ int main(int argc, char** argv)
     app.add_option("--iterations", iterations, "PCG iterations per solve (fixed work)")->check(CLI::Range(1, 100000));
     app.add_option("--turn", turn, "steps of a turn: pile and box alternate turn by turn")
         ->check(CLI::Range(1, 1000000));
-    CLI11_PARSE(app, argc, argv);
+    try {
+        app.parse(argc, argv);
+    } catch (const CLI::ParseError& error) {
+        return app.exit(error) == 0 ? 0 : 2; // --help: 0; a bad option or value: 2
+    }
 
     try {
         const std::vector<int> threads = parse_threads(thread_list);

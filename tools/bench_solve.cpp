@@ -149,7 +149,11 @@ int main(int argc, char** argv)
     app.add_option("--tolerance", tolerance, "PCG relative residual (default: the case's)");
     app.add_option("--max-iterations", max_iterations, "PCG iteration cap (default: the case's)");
     app.add_flag("--per-step", per_step, "a line per step: iterations, set-up and solve time");
-    CLI11_PARSE(app, argc, argv);
+    try {
+        app.parse(argc, argv);
+    } catch (const CLI::ParseError& error) {
+        return app.exit(error) == 0 ? 0 : 2; // --help: 0; a bad option or value: 2
+    }
 
     try {
         const std::vector<Variant> variants = parse_variants(variant_list);
