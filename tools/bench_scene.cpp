@@ -61,16 +61,21 @@ coro::CaseSpec box_like(const coro::CaseSpec& pile, coro::Index tets)
     return box;
 }
 
-// A running simulation and its summary when the timed steps began.
+// A running simulation (of its own copy of the case: Simulation keeps a reference to both) and
+// its summary when the timed steps began.
 struct Timed {
+    coro::CaseSpec spec;
     coro::LoadedScene loaded;
     coro::Simulation simulation;
     coro::RunSummary before;
 
-    explicit Timed(const coro::CaseSpec& spec) : loaded(coro::load_scene(spec)), simulation(loaded.scene, spec)
+    explicit Timed(const coro::CaseSpec& case_spec)
+        : spec(case_spec), loaded(coro::load_scene(spec)), simulation(loaded.scene, spec)
     {
         simulation.start();
     }
+
+    void begin_timing() { before = simulation.summary(); }
 
     // Runs `steps` steps; returns their wall time in seconds.
     double run(coro::Index steps)
@@ -81,11 +86,12 @@ struct Timed {
         return simulation.summary().wall_s - wall;
     }
 
-    Measurement measurement(coro::Index steps) const
+    // Per step of the timed steps.
+    Measurement measurement() const
     {
         const coro::RunSummary after = simulation.summary();
         Measurement m;
-        const double per_step = 1000.0 / static_cast<double>(steps);
+        const double per_step = 1000.0 / static_cast<double>(after.steps - before.steps);
         m.ms_per_step = (after.wall_s - before.wall_s) * per_step;
         m.ms_per_phase.rotation = (after.phases.rotation - before.phases.rotation) * per_step;
         m.ms_per_phase.assembly = (after.phases.assembly - before.phases.assembly) * per_step;
@@ -105,8 +111,8 @@ struct Pair {
     std::vector<double> turn_ratios; // pile / box of each turn
 };
 
-// Pile and box in alternating turns of `turn` steps each, so that a slow spell of a shared host
-// falls on both: their ratio measures the code, not the moment.
+// Pile and box in alternating turns of `turn` steps each; every other pair of turns starts with
+// the box, so that a host growing steadily faster or slower favours neither.
 Pair measure_pair(const coro::CaseSpec& pile_spec, const coro::CaseSpec& box_spec, coro::Index warmup,
                   coro::Index steps, coro::Index turn, int threads)
 {
@@ -114,20 +120,23 @@ Pair measure_pair(const coro::CaseSpec& pile_spec, const coro::CaseSpec& box_spe
     Timed pile(pile_spec), box(box_spec);
     pile.run(warmup);
     box.run(warmup);
-    pile.before = pile.simulation.summary();
-    box.before = box.simulation.summary();
+    pile.begin_timing();
+    box.begin_timing();
     Pair pair;
     for (coro::Index done = 0; done < steps; done += turn) {
         const coro::Index n = std::min(turn, steps - done);
+        const bool box_first = pair.turn_ratios.size() % 2 == 1;
+        const double box_before = box_first ? box.run(n) : 0.0;
         const double pile_s = pile.run(n);
-        pair.turn_ratios.push_back(pile_s / box.run(n));
+        const double box_s = box_first ? box_before : box.run(n);
+        pair.turn_ratios.push_back(pile_s / box_s);
     }
-    pair.pile = pile.measurement(steps);
-    pair.box = box.measurement(steps);
+    pair.pile = pile.measurement();
+    pair.box = box.measurement();
     return pair;
 }
 
-// The q-quantile (0 <= q <= 1) of `values`, by the nearest rank.
+// The q-quantile (0 <= q <= 1) of `values`: the value of rank round(q·(n − 1)), halves rounded up.
 double quantile(std::vector<double> values, double q)
 {
     const auto k = static_cast<std::size_t>(std::lround(q * static_cast<double>(values.size() - 1)));
@@ -188,7 +197,8 @@ int main(int argc, char** argv)
             const coro::CaseSpec box = box_like(pile, tets);
             for (const int n : threads) {
                 const Pair& pair = results[{contact, n}] = measure_pair(pile, box, warmup, steps, turn, n);
-                for (const auto& [name, m] : {std::pair<const char*, const Measurement&>{"pile", pair.pile}, {"box", pair.box}})
+                for (const auto& [name, m] :
+                     {std::pair<const char*, const Measurement&>{"pile", pair.pile}, {"box", pair.box}})
                     std::printf("%-10s %-8s %7d %7d %6d %9.3f %9.3f %9.3f %9.3f %9.3f %9.1f\n", name,
                                 contact ? "on" : "off", n, static_cast<int>(m.bodies), static_cast<int>(m.tets),
                                 m.ms_per_step, m.ms_per_phase.rotation, m.ms_per_phase.assembly,
