@@ -125,10 +125,14 @@ Pair measure_pair(const coro::CaseSpec& pile_spec, const coro::CaseSpec& box_spe
     Pair pair;
     for (coro::Index done = 0; done < steps; done += turn) {
         const coro::Index n = std::min(turn, steps - done);
-        const bool box_first = pair.turn_ratios.size() % 2 == 1;
-        const double box_before = box_first ? box.run(n) : 0.0;
-        const double pile_s = pile.run(n);
-        const double box_s = box_first ? box_before : box.run(n);
+        double pile_s = 0.0, box_s = 0.0;
+        if (pair.turn_ratios.size() % 2 == 0) {
+            pile_s = pile.run(n);
+            box_s = box.run(n);
+        } else {
+            box_s = box.run(n);
+            pile_s = pile.run(n);
+        }
         pair.turn_ratios.push_back(pile_s / box_s);
     }
     pair.pile = pile.measurement();

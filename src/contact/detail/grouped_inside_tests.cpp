@@ -52,8 +52,7 @@ void overlapping_slot_pairs(const std::vector<ContactSurface>& surfaces,
 
 void grouped_inside_tests(const std::vector<ContactSurface>& surfaces, const std::vector<PairCandidates>& candidates,
                           const std::vector<std::size_t>& pair_of, const std::vector<PairSlots>& slot_pairs,
-                          const AxisRayTolerances& tolerances,
-                          bool distance_bounds, GroupingScratch& scratch,
+                          const AxisRayTolerances& tolerances, bool distance_bounds, GroupingScratch& scratch,
                           const std::function<void(std::size_t pair, const GroupedAnswers& answers)>& use)
 {
     const std::size_t pairs = candidates.size();

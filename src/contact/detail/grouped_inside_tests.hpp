@@ -72,8 +72,7 @@ void overlapping_slot_pairs(const std::vector<ContactSurface>& surfaces,
 ///                        in their order, called with the same `candidates` and `scratch`
 void grouped_inside_tests(const std::vector<ContactSurface>& surfaces, const std::vector<PairCandidates>& candidates,
                           const std::vector<std::size_t>& pair_of, const std::vector<PairSlots>& slot_pairs,
-                          const AxisRayTolerances& tolerances,
-                          bool distance_bounds, GroupingScratch& scratch,
+                          const AxisRayTolerances& tolerances, bool distance_bounds, GroupingScratch& scratch,
                           const std::function<void(std::size_t pair, const GroupedAnswers& answers)>& use);
 
 /// The surface distance bound of candidate i of `answers` that was not tested: the bound of its
