@@ -15,10 +15,10 @@
 // `--accuracy` instead prints how far single-precision values are from double ones (after
 // assembly, in a product, and in solves to convergence measured with the double matrix).
 //
-// `--scale K` multiplies the beam's elements along each edge by K (K³ times the matrix): the
-// SOFA beam's double matrix (10.4 MB) fits in the L3 cache of today's server cores, where the
-// product is not limited by memory bandwidth and halving the bytes of its values gains little;
-// at K = 2 (84 MB) it streams from memory, the case single-precision values are made for.
+// `--scale K` multiplies the beam's elements along each edge by K (~K³ times the matrix): the
+// SOFA beam's double matrix (10.4 MB) fits in a 32 MB L3 cache, from where the product is bound
+// by instructions rather than bytes and halving the bytes of its values gains little; at K = 2
+// (80.6 MB) it streams from memory, the case single-precision values are made for.
 //
 //   bench_precision [--threads N] [--scale K] [--accuracy] [benchmark options]   (N: 2, K: 1)
 //   e.g. bench_precision --benchmark_repetitions=10 --benchmark_enable_random_interleaving=true
