@@ -583,19 +583,24 @@ int main(int argc, char** argv)
             rest.push_back(argv[i]);
         }
     }
+    // Google Benchmark takes its own options from the rest; whatever is left is a usage error,
+    // found before the beam is built.
+    int count = static_cast<int>(rest.size());
+    benchmark::Initialize(&count, rest.data());
+    if (benchmark::ReportUnrecognizedArguments(count, rest.data()))
+        return 2;
     tbb::global_control control(tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(threads));
     const BsrMatrix& matrix = beam().body->system_matrix();
-    std::printf("bench_precision: SOFA beam 16x16x76%s, %d nodes, %d blocks (upper, %.1f MB of double values), "
+    std::printf("bench_precision: beam of %dx%dx%d nodes (%s), %d blocks (upper, %.1f MB of double values), "
                 "%d threads\n",
-                g_scale == 1 ? "" : (" with " + std::to_string(g_scale) + "× the elements along each edge").c_str(),
-                static_cast<int>(beam().body->num_vertices()), static_cast<int>(matrix.num_blocks()),
-                static_cast<double>(matrix.num_blocks()) * 9.0 * sizeof(double) / 1e6, threads);
+                15 * g_scale + 1, 15 * g_scale + 1, 75 * g_scale + 1,
+                g_scale == 1 ? "SOFA's" : ("SOFA's with " + std::to_string(g_scale) + "× the elements along each edge").c_str(),
+                static_cast<int>(matrix.num_blocks()), static_cast<double>(matrix.num_blocks()) * 9.0 * sizeof(double) / 1e6,
+                threads);
     if (check_accuracy) {
         accuracy();
         return 0;
     }
-    int count = static_cast<int>(rest.size());
-    benchmark::Initialize(&count, rest.data());
     RecordingReporter reporter;
     benchmark::RunSpecifiedBenchmarks(&reporter);
     benchmark::Shutdown();
