@@ -84,11 +84,19 @@ SurfaceCheck check_surface(const Tris& faces)
 
 double enclosed_volume(CRef<Positions> vertices, const Tris& faces)
 {
+    if (faces.rows() == 0)
+        return 0.0;
+    // The tetrahedra of the faces with a vertex of the surface, not the origin: about the origin
+    // each term carries a rounding error of order eps·|x|³, which for a body far from the origin
+    // (|x| ~ 1e8 for a unit cube) exceeds the volume itself and can flip its sign. The corners
+    // relative to a surface vertex are exact for such a body (Sterbenz), and the errors scale
+    // with the body's size.
+    const Vec3 origin = vertices.row(faces(0, 0)).transpose();
     double volume = 0.0;
     for (Index f = 0; f < faces.rows(); ++f) {
-        const Vec3 a = vertices.row(faces(f, 0)).transpose();
-        const Vec3 b = vertices.row(faces(f, 1)).transpose();
-        const Vec3 c = vertices.row(faces(f, 2)).transpose();
+        const Vec3 a = vertices.row(faces(f, 0)).transpose() - origin;
+        const Vec3 b = vertices.row(faces(f, 1)).transpose() - origin;
+        const Vec3 c = vertices.row(faces(f, 2)).transpose() - origin;
         volume += a.dot(b.cross(c)) / 6.0;
     }
     return volume;

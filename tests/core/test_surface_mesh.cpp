@@ -5,6 +5,8 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 using namespace coro;
 
 TEST(BoundaryFaces, UnitTetHasFourOutwardFaces)
@@ -31,6 +33,23 @@ TEST(BoundaryFaces, BoxSurfaceIsClosedOrientedAndEnclosesTheVolume)
     EXPECT_NEAR(enclosed_volume(mesh.rest_positions, faces), 3.0 * 1.0 * 2.0, 1e-12);
     // Interior nodes of the grid are not on the surface: (3+1)(2+1)(4+1) − (2·1·3).
     EXPECT_EQ(surface_vertices(faces).size(), 60u - 6u);
+}
+
+TEST(EnclosedVolume, StaysAccurateForABodyFarFromTheOrigin)
+{
+    // A unit cube moved by 2^e·(1, −3, 1/2) (every coordinate exact). Summed about the origin,
+    // the rounding of each term (~eps·|x|³) gave 1 + 9e-11 at e = 20 and −2.0e8 at e = 27: the
+    // sign flipped, and correctly oriented meshes were turned inside out at load.
+    const TetMesh cube = make_box(Vec3(0, 0, 0), Vec3(1, 1, 1), {1, 1, 1});
+    const Tris faces = boundary_faces(cube);
+    for (int e : {0, 20, 27, 30, 40}) {
+        const Vec3 shift = std::ldexp(1.0, e) * Vec3(1.0, -3.0, 0.5);
+        const Positions moved = cube.rest_positions.rowwise() + shift.transpose();
+        EXPECT_NEAR(enclosed_volume(moved, faces), 1.0, 1e-12) << "shift 2^" << e;
+        Tris inward = faces;
+        inward.col(1).swap(inward.col(2));
+        EXPECT_NEAR(enclosed_volume(moved, inward), -1.0, 1e-12) << "shift 2^" << e;
+    }
 }
 
 TEST(CheckSurface, CountsOpenAndMisorientedEdges)

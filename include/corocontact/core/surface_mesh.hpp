@@ -38,7 +38,9 @@ struct SurfaceCheck {
 /// Counts open, non-manifold and inconsistently oriented edges of a triangle set.
 SurfaceCheck check_surface(const Tris& faces);
 
-/// Signed volume enclosed by a closed surface (positive when its normals point outward).
+/// Signed volume enclosed by a closed surface (positive when its normals point outward), summed
+/// about a vertex of the surface, so that its rounding scales with the body's size and not with
+/// its distance from the origin.
 double enclosed_volume(CRef<Positions> vertices, const Tris& faces);
 
 } // namespace coro
