@@ -26,7 +26,7 @@ done
 
 packages=(
   build-essential cmake pkg-config
-  libeigen3-dev libtbb-dev libmetis-dev libembree-dev
+  libeigen3-dev libtbb-dev libmetis-dev libembree-dev libgmp-dev
   libvtk9-dev libcli11-dev libtomlplusplus-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   petsc-dev libhypre-dev   # the AMG preconditioner (PETSc GAMG) and bench_amg's hypre

@@ -24,7 +24,7 @@ struct FaceHit {
     enum Kind : unsigned char { MISS, CLEAN, EDGE, PARALLEL };
     Kind kind;
     bool vote;       ///< d·n > 0: the point is on the inner side of the face's plane
-    bool on_surface; ///< the point is on the face (its plane within rounding, its projection)
+    bool on_surface; ///< the point is on the face (exactly on its plane, in the closed triangle)
     double distance; ///< |t|, or for PARALLEL the gap to the face's extent along the axis
     double bound;    ///< rounding bound of `distance`
 };
@@ -96,7 +96,25 @@ FaceHit classify_exact(const double* A, const double* B, const double* C, const 
     hit.distance = t;
     hit.bound = 1.01 * ((num_bound + t * na_bound) / (std::abs(na) - na_bound) + EPS * t);
     hit.vote = num > 0.0;
-    hit.on_surface = std::abs(num) <= num_bound && s0 >= -e0 && s1 >= -e1 && s2 >= -e2;
+    if (std::abs(num) <= num_bound) {
+        // The point lies within rounding of the face's plane: the exact side decides the vote,
+        // and only a point exactly on the plane and in the closed triangle is on the surface
+        // (a point a rounding inside the surface is inside).
+        double p[3];
+        p[f.a] = f.pa;
+        p[f.u] = f.pu;
+        p[f.v] = f.pv;
+        const int side = detail::exact_plane_side(A, B, C, p);
+        if (side != 0) {
+            hit.vote = side > 0;
+        } else {
+            const auto sign = [&](double w, double e, const double* X, const double* Y) {
+                return std::abs(w) > e ? (w > 0.0 ? 1 : -1) : detail::exact_orient2d(f.pu, f.pv, X[f.u], X[f.v], Y[f.u], Y[f.v]);
+            };
+            const int sa = na > 0.0 ? 1 : -1; // beyond its rounding: the face is not parallel
+            hit.on_surface = sa * sign(w0, e0, B, C) >= 0 && sa * sign(w1, e1, C, A) >= 0 && sa * sign(w2, e2, A, B) >= 0;
+        }
+    }
     return hit;
 }
 

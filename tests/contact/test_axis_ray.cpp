@@ -334,6 +334,31 @@ TEST(AxisTest, PointOnFaceEdgeOrVertexIsOnTheSurface)
     EXPECT_EQ(axis_test(b, Vec3(1, 0.3, 0.6), 1, DetectionMode::EXACT, NO_FACES, TOL), AxisOutcome::DEGENERATE);
 }
 
+TEST(AxisTest, APointARoundingOffATiltedFaceIsOnTheSideItIsOn)
+{
+    // The octahedron |x| + |y| + |z| ≤ 1, and points (1/4, 1/4, 1/2 ± k ulp) next to its face
+    // x + y + z = 1: within the rounding bound of that face's plane, which once made all of them
+    // "on the surface". Their exact side (x + y + z against 1, exact in long double here) is
+    // what counts; only k = 0 lies on the surface.
+    Positions v(6, 3);
+    v << 1, 0, 0, -1, 0, 0, 0, 1, 0, 0, -1, 0, 0, 0, 1, 0, 0, -1;
+    Tris f(8, 3);
+    f << 0, 2, 4, 2, 1, 4, 1, 3, 4, 3, 0, 4, 2, 0, 5, 1, 2, 5, 3, 1, 5, 0, 3, 5;
+    const ContactSurface octahedron = ContactSurface::from_body("octahedron", v, f);
+    for (const double direction : {-1.0, 1.0})
+        for (const int k : {0, 1, 2, 8, 32, 64}) {
+            Vec3 p(0.25, 0.25, 0.5);
+            for (int i = 0; i < k; ++i)
+                p.z() = std::nextafter(p.z(), direction);
+            const long double sum = static_cast<long double>(p.x()) + p.y() + p.z();
+            for (const DetectionMode mode : {DetectionMode::EXACT, DetectionMode::BRUTE_FORCE}) {
+                const InsideTest r = inside_test(octahedron, p, mode, NO_FACES, TOL);
+                EXPECT_EQ(r.inside, sum < 1.0L) << "k = " << k << " direction " << direction;
+                EXPECT_EQ(r.on_surface, sum == 1.0L) << "k = " << k << " direction " << direction;
+            }
+        }
+}
+
 TEST(AxisTest, EdgeAndParallelContactsDoNotDecide)
 {
     const ContactSurface b = box_surface({Vec3(0, 0, 0), Vec3(1, 1, 1), {1, 1, 1}}, "B");

@@ -25,8 +25,8 @@ enum class AxisOutcome {
     NO_HIT,     ///< the axis line meets no (candidate) face
     DEGENERATE, ///< exact modes: the closest contact is an edge, a vertex, a parallel face, or
                 ///< competing crossings disagree: this axis does not decide
-    ON_SURFACE, ///< exact modes: the point lies on the surface (on a face's plane, within the
-                ///< rounding bound, and inside its projection): reported as not inside
+    ON_SURFACE, ///< exact modes: the point lies on the surface (exactly on a face's plane and
+                ///< in the closed face): reported as not inside
 };
 
 /// Tolerances of the narrow phase. The exact modes add to each a bound of the floating-point
@@ -55,7 +55,8 @@ struct AxisRayTolerances {
 /// face with |n_axis| ≤ `parallel_relative`·|n| is parallel (its distance is that of its extent
 /// along the axis). Let R be the smallest distance of a crossing plus its rounding bound; the
 /// crossings whose distance minus bound is within (1 + `tie_relative`)·R compete. ON_SURFACE if
-/// one of them has the point on its plane (within rounding); DEGENERATE if one is an edge or
+/// one of them has the point on it (exactly: where the point is within rounding of a face's
+/// plane, its side is found in rational arithmetic); DEGENERATE if one is an edge or
 /// parallel crossing, if their votes differ, or if only parallel faces are met; else their
 /// common vote. For a closed, consistently oriented surface a decision is the exact answer.
 /// @param[in] candidate_faces  faces to consider (paper mode); ignored in the exact modes, where

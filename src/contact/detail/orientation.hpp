@@ -1,7 +1,8 @@
 #pragma once
 /// @file orientation.hpp
 /// @brief Rounding bounds of orientation signs and a face normal with the permanent that bounds
-/// its rounding: what the exact narrow-phase tests (axis_ray.cpp, segment_triangle.hpp) share.
+/// its rounding: what the exact narrow-phase tests (axis_ray.cpp, segment_triangle.hpp) share;
+/// and the exact signs (GMP rationals) for the rare case that a sign lies within its bound.
 
 #include <cmath>
 #include <limits>
@@ -32,5 +33,15 @@ inline FaceNormal face_normal(const double* A, const double* B, const double* C)
     return {{p0 - p1, p2 - p3, p4 - p5},
             {std::abs(p0) + std::abs(p1), std::abs(p2) + std::abs(p3), std::abs(p4) + std::abs(p5)}};
 }
+
+/// The exact sign (−1, 0, +1) of ((B − A) × (C − A))·(A − P), the orientation of point P
+/// against the plane of triangle (A, B, C), each a point of 3 doubles; positive when P lies on the
+/// side that (B − A) × (C − A) points away from. Computed in rational arithmetic: for the signs
+/// that the rounding bounds above leave open.
+int exact_plane_side(const double* A, const double* B, const double* C, const double* P);
+
+/// The exact sign of (bu − pu)(cv − pv) − (bv − pv)(cu − pu): the orientation of the 2D points
+/// p, b, c (doubles), in rational arithmetic.
+int exact_orient2d(double pu, double pv, double bu, double bv, double cu, double cv);
 
 } // namespace coro::detail
