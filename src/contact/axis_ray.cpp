@@ -3,6 +3,7 @@
 #include <corocontact/contact/winding_number.hpp>
 
 #include "detail/axis_walk.hpp"
+#include "detail/exact_parity.hpp"
 #include "detail/inside_tests.hpp"
 #include "detail/orientation.hpp"
 
@@ -363,8 +364,15 @@ InsideTest inside_test_from(const ContactSurface& surface, const Vec3& point, in
             return result;
     }
     if (mode != DetectionMode::PAPER) {
-        result.inside = winding_number(surface.vertices, surface.faces, point) > 0.5;
-        result.decided_by = DecidedBy::WINDING_NUMBER;
+        const detail::ParityTest parity = detail::exact_parity_test(surface, point);
+        if (parity.decided) {
+            result.inside = parity.inside;
+            result.on_surface = parity.on_surface;
+            result.decided_by = DecidedBy::EXACT_PARITY;
+        } else { // every segment tried met an edge or a vertex: not seen, but not impossible
+            result.inside = winding_number(surface.vertices, surface.faces, point) > 0.5;
+            result.decided_by = DecidedBy::WINDING_NUMBER;
+        }
     }
     return result;
 }

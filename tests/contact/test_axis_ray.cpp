@@ -105,7 +105,7 @@ int expect_vertices_match_box(const ContactSurface& a, const ContactSurface& b, 
         const bool on = !inside && in_closed(p, min, max);
         EXPECT_EQ(r.inside, inside) << a.name << " vertex " << v << " (" << p.transpose() << ") in " << b.name;
         EXPECT_EQ(r.on_surface, on) << a.name << " vertex " << v << " (" << p.transpose() << ") on " << b.name;
-        fallbacks += r.decided_by == DecidedBy::WINDING_NUMBER ? 1 : 0;
+        fallbacks += r.decided_by == DecidedBy::EXACT_PARITY ? 1 : 0;
     }
     return fallbacks;
 }
@@ -357,6 +357,33 @@ TEST(AxisTest, APointARoundingOffATiltedFaceIsOnTheSideItIsOn)
                 EXPECT_EQ(r.on_surface, sum == 1.0L) << "k = " << k << " direction " << direction;
             }
         }
+}
+
+TEST(InsideTest, APointARoundingOffAnEdgeIsDecidedExactly)
+{
+    // Next to the octahedron's edge x + y = 1, z = 0, every axis line meets an edge: the three
+    // axes leave (1/2, 1/2 ± k ulp, 0) undecided, and the exact parity decides (it was the float
+    // winding number, which rounding can fool there).
+    Positions v(6, 3);
+    v << 1, 0, 0, -1, 0, 0, 0, 1, 0, 0, -1, 0, 0, 0, 1, 0, 0, -1;
+    Tris f(8, 3);
+    f << 0, 2, 4, 2, 1, 4, 1, 3, 4, 3, 0, 4, 2, 0, 5, 1, 2, 5, 3, 1, 5, 0, 3, 5;
+    const ContactSurface octahedron = ContactSurface::from_body("octahedron", v, f);
+    int by_parity = 0;
+    for (const double direction : {-1.0, 1.0})
+        for (const int k : {0, 1, 2, 8, 64}) {
+            Vec3 p(0.5, 0.5, 0.0);
+            for (int i = 0; i < k; ++i)
+                p.y() = std::nextafter(p.y(), direction);
+            const long double sum = static_cast<long double>(p.x()) + p.y() + std::abs(p.z());
+            for (const DetectionMode mode : {DetectionMode::EXACT, DetectionMode::BRUTE_FORCE}) {
+                const InsideTest r = inside_test(octahedron, p, mode, NO_FACES, TOL);
+                EXPECT_EQ(r.inside, sum < 1.0L) << "k = " << k << " direction " << direction;
+                EXPECT_EQ(r.on_surface, sum == 1.0L) << "k = " << k << " direction " << direction;
+                by_parity += r.decided_by == DecidedBy::EXACT_PARITY ? 1 : 0;
+            }
+        }
+    EXPECT_GT(by_parity, 0); // the case this test is for
 }
 
 TEST(AxisTest, EdgeAndParallelContactsDoNotDecide)

@@ -72,8 +72,9 @@ enum class DecidedBy {
                     ///< the point on the surface
     Y_AXIS,         ///< the y axis, as X_AXIS
     Z_AXIS,         ///< the z axis, as X_AXIS
-    WINDING_NUMBER, ///< the generalized winding number: a surface that is not closed, or (exact
-                    ///< modes) three axes that did not decide
+    WINDING_NUMBER, ///< the generalized winding number: a surface that is not closed
+    EXACT_PARITY,   ///< exact modes, closed surface, three axes that did not decide: the exact
+                    ///< parity of a segment's face crossings (or the point exactly on a face)
 };
 
 /// The axis (0, 1, 2) of DecidedBy::X_AXIS, Y_AXIS, Z_AXIS; −1 for the others.
@@ -107,7 +108,8 @@ struct InsideTest {
 /// Exact modes: axes x, y, z; INSIDE, OUTSIDE or ON_SURFACE decide (a point on the surface is
 /// reported as not inside, `on_surface` set); NO_HIT also decides outside (a line through an
 /// inside point of a closed surface always meets it); DEGENERATE tries the next axis; three
-/// degenerate axes fall back to the generalized winding number (w > 0.5).
+/// degenerate axes fall back to the exact parity of the faces that a segment from the point to
+/// outside the surface crosses (every orientation sign exact; DecidedBy::EXACT_PARITY).
 /// A surface that is not closed is tested by the winding number alone.
 /// @param[in] candidate_faces  paper mode: faces of `surface` with at least one vertex in I
 InsideTest inside_test(const ContactSurface& surface, const Vec3& point, DetectionMode mode,

@@ -21,6 +21,10 @@ constexpr Index FACE_PLANES_FROM = 256;
 
 bool uses_face_planes(const ContactSurface& surface) { return surface.faces.rows() >= FACE_PLANES_FROM; }
 
+/// A test no axis decided (counted in DetectionStats::winding_fallbacks): the exact parity of a
+/// closed surface, or the winding number of an open one.
+bool is_fallback(DecidedBy by) { return by == DecidedBy::EXACT_PARITY || by == DecidedBy::WINDING_NUMBER; }
+
 /// The contact point of `vertex` of `body` inside `other` whose nearest point on the other
 /// surface is `nearest`: its distance as depth, its face's outward unit normal.
 ContactPoint make_point(const std::vector<ContactSurface>& surfaces, Index body, Index vertex, Index other,
@@ -172,7 +176,7 @@ void DetectionPass::take(std::size_t k, Index first, Index count, const InsideTe
     for (Index i = 0; i < count; ++i) {
         const InsideTest& result = results[i];
         on_surface += result.on_surface ? 1 : 0;
-        fallbacks += result.decided_by == DecidedBy::WINDING_NUMBER ? 1 : 0;
+        fallbacks += is_fallback(result.decided_by) ? 1 : 0;
         inside[i] = result.inside ? 1 : 0;
         inside_count += result.inside ? 1 : 0;
     }
@@ -199,7 +203,7 @@ void DetectionPass::take(std::size_t k, Index first, Index count, const GroupedA
         if (tested[group[i]] == first + i) { // few, where groups are shared: a branch rarely taken
             ++tests;
             on_surface += result.on_surface ? 1 : 0;
-            fallbacks += result.decided_by == DecidedBy::WINDING_NUMBER ? 1 : 0;
+            fallbacks += is_fallback(result.decided_by) ? 1 : 0;
         }
     }
     this->count(count, inside_count, on_surface, fallbacks, count - tests);
