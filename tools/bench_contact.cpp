@@ -131,7 +131,7 @@ void detect(benchmark::State& state, DetectionMode mode, bool with_refit, bool c
         benchmark::DoNotOptimize(points.data());
         queries += stats.candidate_vertices;
         inside += stats.inside;
-        fallbacks += stats.winding_fallbacks;
+        fallbacks += stats.undecided_by_axes;
     }
     set_scene_counters(state, s);
     const auto iterations = static_cast<double>(state.iterations());

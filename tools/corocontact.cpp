@@ -452,9 +452,9 @@ int detect_case(const DetectOptions& options)
                  "or obstacle, once per body it is inside)\n",
                  points.size(), vertices_inside.size());
     std::fprintf(report,
-                 "  %d vertices on a surface (counted outside), %d winding-number fallbacks, %d answered by a "
+                 "  %d vertices on a surface (counted outside), %d undecided by the axes, %d answered by a "
                  "neighbour (clear-edge group), %d outside the other surface's hull slabs (not tested)\n",
-                 stats.on_surface, stats.winding_fallbacks, stats.by_neighbour, stats.by_hull);
+                 stats.on_surface, stats.undecided_by_axes, stats.by_neighbour, stats.by_hull);
 
 #if CORO_WITH_EMBREE
     if (!options.cross_check.empty()) {

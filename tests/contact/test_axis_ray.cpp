@@ -120,6 +120,16 @@ ContactSurface box_surface(const BoxSpec& spec, const std::string& name)
     return surface_of(make_box(spec.min, spec.max, spec.cells), name);
 }
 
+/// The octahedron |x| + |y| + |z| ≤ 1, faces wound outward: its faces are tilted to every axis.
+ContactSurface unit_octahedron()
+{
+    Positions v(6, 3);
+    v << 1, 0, 0, -1, 0, 0, 0, 1, 0, 0, -1, 0, 0, 0, 1, 0, 0, -1;
+    Tris f(8, 3);
+    f << 0, 2, 4, 2, 1, 4, 1, 3, 4, 3, 0, 4, 2, 0, 5, 1, 2, 5, 3, 1, 5, 0, 3, 5;
+    return ContactSurface::from_body("octahedron", v, f);
+}
+
 } // namespace
 
 TEST(InsideTest, SphereVerticesAgainstAnalyticSphere)
@@ -340,11 +350,7 @@ TEST(AxisTest, APointARoundingOffATiltedFaceIsOnTheSideItIsOn)
     // x + y + z = 1: within the rounding bound of that face's plane, which once made all of them
     // "on the surface". Their exact side (x + y + z against 1, exact in long double here) is
     // what counts; only k = 0 lies on the surface.
-    Positions v(6, 3);
-    v << 1, 0, 0, -1, 0, 0, 0, 1, 0, 0, -1, 0, 0, 0, 1, 0, 0, -1;
-    Tris f(8, 3);
-    f << 0, 2, 4, 2, 1, 4, 1, 3, 4, 3, 0, 4, 2, 0, 5, 1, 2, 5, 3, 1, 5, 0, 3, 5;
-    const ContactSurface octahedron = ContactSurface::from_body("octahedron", v, f);
+    const ContactSurface octahedron = unit_octahedron();
     for (const double direction : {-1.0, 1.0})
         for (const int k : {0, 1, 2, 8, 32, 64}) {
             Vec3 p(0.25, 0.25, 0.5);
@@ -364,11 +370,7 @@ TEST(InsideTest, APointARoundingOffAnEdgeIsDecidedExactly)
     // Next to the octahedron's edge x + y = 1, z = 0, every axis line meets an edge: the three
     // axes leave (1/2, 1/2 ± k ulp, 0) undecided, and the exact parity decides (it was the float
     // winding number, which rounding can fool there).
-    Positions v(6, 3);
-    v << 1, 0, 0, -1, 0, 0, 0, 1, 0, 0, -1, 0, 0, 0, 1, 0, 0, -1;
-    Tris f(8, 3);
-    f << 0, 2, 4, 2, 1, 4, 1, 3, 4, 3, 0, 4, 2, 0, 5, 1, 2, 5, 3, 1, 5, 0, 3, 5;
-    const ContactSurface octahedron = ContactSurface::from_body("octahedron", v, f);
+    const ContactSurface octahedron = unit_octahedron();
     int by_parity = 0;
     for (const double direction : {-1.0, 1.0})
         for (const int k : {0, 1, 2, 8, 64}) {

@@ -64,7 +64,8 @@ struct DetectionStats {
     Index pairs = 0;              ///< overlapping body pairs (broad phase)
     Index candidate_vertices = 0; ///< vertices asked about (both directions)
     Index inside = 0;
-    Index winding_fallbacks = 0;  ///< exact mode: vertices undecided on all three axes (DecidedBy::EXACT_PARITY)
+    Index undecided_by_axes = 0;  ///< exact mode: vertices no axis decided (DecidedBy::EXACT_PARITY,
+                                  ///< or WINDING_NUMBER for an open surface)
     Index on_surface = 0;         ///< exact mode: vertices lying on the other surface (not inside)
     Index by_neighbour = 0;       ///< exact mode: vertices that took the answer of the first vertex
                                   ///< of their clear-edge group (DetectionSettings::share_answers)

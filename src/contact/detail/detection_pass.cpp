@@ -21,7 +21,7 @@ constexpr Index FACE_PLANES_FROM = 256;
 
 bool uses_face_planes(const ContactSurface& surface) { return surface.faces.rows() >= FACE_PLANES_FROM; }
 
-/// A test no axis decided (counted in DetectionStats::winding_fallbacks): the exact parity of a
+/// A test no axis decided (counted in DetectionStats::undecided_by_axes): the exact parity of a
 /// closed surface, or the winding number of an open one.
 bool is_fallback(DecidedBy by) { return by == DecidedBy::EXACT_PARITY || by == DecidedBy::WINDING_NUMBER; }
 
@@ -164,7 +164,7 @@ void DetectionPass::count(Index candidates, Index inside, Index on_surface, Inde
     counts.candidate_vertices += candidates;
     counts.inside += inside;
     counts.on_surface += on_surface;
-    counts.winding_fallbacks += fallbacks;
+    counts.undecided_by_axes += fallbacks;
     counts.by_neighbour += by_neighbour;
 }
 
@@ -283,7 +283,7 @@ void DetectionPass::finish(Index pairs, DetectionStats* stats, std::vector<Conta
         for (const DetectionStats& s : m_state.stats) {
             sum.candidate_vertices += s.candidate_vertices;
             sum.inside += s.inside;
-            sum.winding_fallbacks += s.winding_fallbacks;
+            sum.undecided_by_axes += s.undecided_by_axes;
             sum.on_surface += s.on_surface;
             sum.by_neighbour += s.by_neighbour;
         }
