@@ -18,6 +18,7 @@ namespace {
 using detail::EPS;
 using detail::ORIENT2D_BOUND;
 using detail::ORIENT3D_BOUND;
+using detail::UNDERFLOW_BOUND;
 constexpr double INF = std::numeric_limits<double>::infinity();
 
 /// One face against the axis line of a point (exact modes).
@@ -52,16 +53,16 @@ FaceHit classify_exact(const double* A, const double* B, const double* C, const 
     const double au = A[f.u] - f.pu, av = A[f.v] - f.pv;
     const double bu = B[f.u] - f.pu, bv = B[f.v] - f.pv;
     const double cu = C[f.u] - f.pu, cv = C[f.v] - f.pv;
-    const double w0 = bu * cv - bv * cu, e0 = ORIENT2D_BOUND * (std::abs(bu * cv) + std::abs(bv * cu));
-    const double w1 = cu * av - cv * au, e1 = ORIENT2D_BOUND * (std::abs(cu * av) + std::abs(cv * au));
-    const double w2 = au * bv - av * bu, e2 = ORIENT2D_BOUND * (std::abs(au * bv) + std::abs(av * bu));
+    const double w0 = bu * cv - bv * cu, e0 = ORIENT2D_BOUND * (std::abs(bu * cv) + std::abs(bv * cu)) + UNDERFLOW_BOUND;
+    const double w1 = cu * av - cv * au, e1 = ORIENT2D_BOUND * (std::abs(cu * av) + std::abs(cv * au)) + UNDERFLOW_BOUND;
+    const double w2 = au * bv - av * bu, e2 = ORIENT2D_BOUND * (std::abs(au * bv) + std::abs(av * bu)) + UNDERFLOW_BOUND;
 
     // Face normal n = (B − A) × (C − A); n_a is the projected (doubled) area Af.
     const detail::FaceNormal normal = detail::face_normal(A, B, C);
     const double* n = normal.n;
     const double* perm = normal.permanent;
     const double na = n[f.a];
-    const double na_bound = ORIENT2D_BOUND * perm[f.a];
+    const double na_bound = ORIENT2D_BOUND * perm[f.a] + UNDERFLOW_BOUND;
     const double n_norm = std::abs(n[0]) + std::abs(n[1]) + std::abs(n[2]);
 
     if (std::abs(na) <= std::max(tol.parallel_relative * n_norm, na_bound)) {
@@ -92,7 +93,8 @@ FaceHit classify_exact(const double* A, const double* B, const double* C, const 
     qa[f.v] = av;
     const double num = n[0] * qa[0] + n[1] * qa[1] + n[2] * qa[2];
     const double num_bound =
-        ORIENT3D_BOUND * (perm[0] * std::abs(qa[0]) + perm[1] * std::abs(qa[1]) + perm[2] * std::abs(qa[2]));
+        ORIENT3D_BOUND * (perm[0] * std::abs(qa[0]) + perm[1] * std::abs(qa[1]) + perm[2] * std::abs(qa[2])) +
+        UNDERFLOW_BOUND * (1.0 + std::abs(qa[0]) + std::abs(qa[1]) + std::abs(qa[2]));
     const double t = std::abs(num / na);
     hit.distance = t;
     hit.bound = 1.01 * ((num_bound + t * na_bound) / (std::abs(na) - na_bound) + EPS * t);

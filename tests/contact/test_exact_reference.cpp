@@ -342,3 +342,41 @@ TEST(ExactReference, DetectionAgreesWithExactRationalsOnGridAndPerturbedScenes)
                 "%ld on a surface, %ld outside; %ld answers shared\n",
                 inside, on_surface, outside, near_face[1], near_face[2], near_face[0], static_cast<long>(shared));
 }
+
+TEST(ExactReference, SubnormalCoordinatesAreDecidedExactly)
+{
+    // A box whose face y = 0 is tilted by a subnormal amount: its corner (1/2, 0, 5/4) moved to
+    // y = k times the smallest subnormal. The point (9/16, k/2 of it, 33/32) lies on the tilted
+    // face; points a few ulps and subnormal steps away lie on either side. The float products of
+    // the orientation signs underflow there, which relative rounding bounds alone do not cover
+    // (found by the scenes above with another seed: a point on the surface was inside).
+    const TetMesh mesh = make_box(Vec3(0.25, 0.0, 0.375), Vec3(1.0, 0.375, 1.25), {3, 4, 1});
+    const Tris faces = boundary_faces(mesh);
+    const double tiny = std::numeric_limits<double>::denorm_min();
+    const AxisRayTolerances tolerances;
+    const std::vector<Index> no_faces;
+    std::array<long, 3> sides{};
+    for (const int k : {-4, -2, 2, 4}) {
+        Positions nodes = mesh.rest_positions;
+        for (Eigen::Index v = 0; v < nodes.rows(); ++v)
+            if (nodes.row(v) == Eigen::RowVector3d(0.5, 0.0, 1.25))
+                nodes(v, 1) = k * tiny;
+        const ContactSurface surface = ContactSurface::from_body("box", nodes, faces);
+        const ExactSurface exact(surface);
+        for (int ulps = -2; ulps <= 2; ++ulps)
+            for (int steps = -2; steps <= 2; ++steps) {
+                Vec3 p(0.5625, (k / 2 + steps) * tiny, 1.03125);
+                for (int i = 0; i < std::abs(ulps); ++i)
+                    p.x() = std::nextafter(p.x(), ulps > 0 ? 1.0 : 0.0);
+                const Side side = exact_side(exact, p);
+                sides[static_cast<std::size_t>(side)] += 1;
+                for (const DetectionMode mode : {DetectionMode::EXACT, DetectionMode::BRUTE_FORCE}) {
+                    const InsideTest r = inside_test(surface, p, mode, no_faces, tolerances);
+                    EXPECT_EQ(r.inside, side == Side::INSIDE) << "k " << k << ", point " << p.transpose();
+                    EXPECT_EQ(r.on_surface, side == Side::ON_SURFACE) << "k " << k << ", point " << p.transpose();
+                }
+            }
+    }
+    for (const long n : sides)
+        EXPECT_GT(n, 0);
+}

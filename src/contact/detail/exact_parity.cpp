@@ -18,7 +18,8 @@ int orient3d(const double* A, const double* B, const double* C, const double* D)
     const double d[3] = {D[0] - A[0], D[1] - A[1], D[2] - A[2]};
     const double value = normal.n[0] * d[0] + normal.n[1] * d[1] + normal.n[2] * d[2];
     const double bound = ORIENT3D_BOUND * (normal.permanent[0] * std::abs(d[0]) +
-                                           normal.permanent[1] * std::abs(d[1]) + normal.permanent[2] * std::abs(d[2]));
+                                           normal.permanent[1] * std::abs(d[1]) + normal.permanent[2] * std::abs(d[2])) +
+                         UNDERFLOW_BOUND * (1.0 + std::abs(d[0]) + std::abs(d[1]) + std::abs(d[2]));
     if (std::abs(value) > bound)
         return value > 0.0 ? 1 : -1;
     return -exact_plane_side(A, B, C, D); // that one is the sign of n·(A − D)

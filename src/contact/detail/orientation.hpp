@@ -14,10 +14,16 @@ constexpr double EPS = std::numeric_limits<double>::epsilon();
 // ccwerrboundA ≈ 3ε/2 and o3derrboundA ≈ 7ε/2, ε = 2^-53, taken with a safety factor).
 constexpr double ORIENT2D_BOUND = 3.0 * EPS;
 constexpr double ORIENT3D_BOUND = 8.0 * EPS;
+// Those bounds hold while no product underflows. One that does (subnormal coordinates or
+// differences) errs by up to 2⁻¹⁰⁷⁵ more, absolutely; a sign sums a few such errors, multiplied
+// at most once more by a difference d: so each bound adds UNDERFLOW_BOUND, times 1 + Σ_j |d_j|
+// where its products are multiplied again. Only values below ~2⁻¹⁰⁰⁰ feel it (then the exact
+// signs decide).
+constexpr double UNDERFLOW_BOUND = 0x1p-1060;
 
 /// n = (B − A) × (C − A) from rounded differences, and per component the sum of the absolute
 /// values of its two products: n·d (d a rounded difference) has the exact sign of the
-/// orientation when |n·d| > ORIENT3D_BOUND·Σ_j permanent_j·|d_j|.
+/// orientation when |n·d| > ORIENT3D_BOUND·Σ_j permanent_j·|d_j| + UNDERFLOW_BOUND·(1 + Σ_j |d_j|).
 struct FaceNormal {
     double n[3];
     double permanent[3];

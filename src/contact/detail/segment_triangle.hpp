@@ -24,7 +24,8 @@ inline __attribute__((always_inline)) SignedVolume volume(const double* r, const
     const double permanent = std::abs(r[0]) * (std::abs(m0) + std::abs(m1)) +
                              std::abs(r[1]) * (std::abs(m2) + std::abs(m3)) +
                              std::abs(r[2]) * (std::abs(m4) + std::abs(m5));
-    return {value, ORIENT3D_BOUND * permanent};
+    return {value, ORIENT3D_BOUND * permanent +
+                       UNDERFLOW_BOUND * (1.0 + std::abs(r[0]) + std::abs(r[1]) + std::abs(r[2]))};
 }
 
 inline bool positive(const SignedVolume& s) { return s.value > s.bound; }
@@ -44,7 +45,8 @@ inline bool segment_misses_triangle(const double* p, const double* q, const doub
         const double d[3] = {x[0] - a[0], x[1] - a[1], x[2] - a[2]};
         return SignedVolume{n[0] * d[0] + n[1] * d[1] + n[2] * d[2],
                             ORIENT3D_BOUND *
-                                (perm[0] * std::abs(d[0]) + perm[1] * std::abs(d[1]) + perm[2] * std::abs(d[2]))};
+                                    (perm[0] * std::abs(d[0]) + perm[1] * std::abs(d[1]) + perm[2] * std::abs(d[2])) +
+                                UNDERFLOW_BOUND * (1.0 + std::abs(d[0]) + std::abs(d[1]) + std::abs(d[2]))};
     };
     const SignedVolume side_p = side(p);
     if (positive(side_p) || negative(side_p)) {
@@ -85,6 +87,13 @@ inline void transpose(const double* const* v, __m256d& x, __m256d& y, __m256d& z
 
 inline __m256d abs(__m256d v) { return _mm256_andnot_pd(_mm256_set1_pd(-0.0), v); }
 
+/// UNDERFLOW_BOUND·(1 + Σ_j |d_j|) per lane.
+inline __m256d underflow_bound(const __m256d* d)
+{
+    const __m256d sum = _mm256_add_pd(_mm256_add_pd(abs(d[0]), abs(d[1])), abs(d[2]));
+    return _mm256_mul_pd(_mm256_set1_pd(UNDERFLOW_BOUND), _mm256_add_pd(_mm256_set1_pd(1.0), sum));
+}
+
 /// SignedVolume per lane, as masks: value > bound, value < −bound.
 struct Signs {
     __m256d positive, negative;
@@ -109,7 +118,7 @@ inline Signs volume(const __m256d* r, const __m256d* x, const __m256d* y)
         _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(abs(r[0]), _mm256_add_pd(abs(m0), abs(m1))),
                                     _mm256_mul_pd(abs(r[1]), _mm256_add_pd(abs(m2), abs(m3)))),
                       _mm256_mul_pd(abs(r[2]), _mm256_add_pd(abs(m4), abs(m5))));
-    return signs(value, _mm256_mul_pd(_mm256_set1_pd(ORIENT3D_BOUND), permanent));
+    return signs(value, _mm256_add_pd(_mm256_mul_pd(_mm256_set1_pd(ORIENT3D_BOUND), permanent), underflow_bound(r)));
 }
 
 } // namespace lanes
@@ -153,11 +162,12 @@ inline int segment_misses_triangles(const double* p, const double* q, const doub
             d[j] = _mm256_sub_pd(_mm256_set1_pd(x[j]), A[j]);
         const __m256d value = _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(n[0], d[0]), _mm256_mul_pd(n[1], d[1])),
                                             _mm256_mul_pd(n[2], d[2]));
-        const __m256d bound = _mm256_mul_pd(
-            _mm256_set1_pd(ORIENT3D_BOUND),
-            _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(permanent[0], lanes::abs(d[0])),
-                                        _mm256_mul_pd(permanent[1], lanes::abs(d[1]))),
-                          _mm256_mul_pd(permanent[2], lanes::abs(d[2]))));
+        const __m256d bound = _mm256_add_pd(
+            _mm256_mul_pd(_mm256_set1_pd(ORIENT3D_BOUND),
+                          _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(permanent[0], lanes::abs(d[0])),
+                                                      _mm256_mul_pd(permanent[1], lanes::abs(d[1]))),
+                                        _mm256_mul_pd(permanent[2], lanes::abs(d[2])))),
+            lanes::underflow_bound(d));
         return lanes::signs(value, bound);
     };
     const lanes::Signs side_p = side(p), side_q = side(q);
