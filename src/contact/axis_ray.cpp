@@ -53,9 +53,12 @@ FaceHit classify_exact(const double* A, const double* B, const double* C, const 
     const double au = A[f.u] - f.pu, av = A[f.v] - f.pv;
     const double bu = B[f.u] - f.pu, bv = B[f.v] - f.pv;
     const double cu = C[f.u] - f.pu, cv = C[f.v] - f.pv;
-    const double w0 = bu * cv - bv * cu, e0 = ORIENT2D_BOUND * (std::abs(bu * cv) + std::abs(bv * cu)) + UNDERFLOW_BOUND;
-    const double w1 = cu * av - cv * au, e1 = ORIENT2D_BOUND * (std::abs(cu * av) + std::abs(cv * au)) + UNDERFLOW_BOUND;
-    const double w2 = au * bv - av * bu, e2 = ORIENT2D_BOUND * (std::abs(au * bv) + std::abs(av * bu)) + UNDERFLOW_BOUND;
+    const double w0 = bu * cv - bv * cu;
+    const double e0 = ORIENT2D_BOUND * (std::abs(bu * cv) + std::abs(bv * cu)) + UNDERFLOW_BOUND;
+    const double w1 = cu * av - cv * au;
+    const double e1 = ORIENT2D_BOUND * (std::abs(cu * av) + std::abs(cv * au)) + UNDERFLOW_BOUND;
+    const double w2 = au * bv - av * bu;
+    const double e2 = ORIENT2D_BOUND * (std::abs(au * bv) + std::abs(av * bu)) + UNDERFLOW_BOUND;
 
     // Face normal n = (B − A) × (C − A); n_a is the projected (doubled) area Af.
     const detail::FaceNormal normal = detail::face_normal(A, B, C);
@@ -97,7 +100,7 @@ FaceHit classify_exact(const double* A, const double* B, const double* C, const 
         UNDERFLOW_BOUND * (1.0 + std::abs(qa[0]) + std::abs(qa[1]) + std::abs(qa[2]));
     const double t = std::abs(num / na);
     hit.distance = t;
-    hit.bound = 1.01 * ((num_bound + t * na_bound) / (std::abs(na) - na_bound) + EPS * t);
+    hit.bound = 1.01 * ((num_bound + t * na_bound) / (std::abs(na) - na_bound) + EPS * t) + UNDERFLOW_BOUND;
     hit.vote = num > 0.0;
     if (std::abs(num) <= num_bound) {
         // The point lies within rounding of the face's plane: the exact side decides the vote,

@@ -4,10 +4,11 @@
 // the level of the coordinates' rounding. The reference knows nothing of the axis rays: a vertex
 // on a face (exact orientation and closed triangle) is on the surface, else it is inside when a
 // segment from it to outside the surface's box crosses an odd number of faces; every sign is exact
-// (floating point beyond Shewchuk's error bound, GMP rationals within it), and a segment that
-// meets an edge, a vertex or a face's plane is redrawn.
+// (floating point beyond Shewchuk's error bound, GMP rationals within it), and a segment lying in
+// a face's plane, or crossing one on an edge's line, is redrawn.
 
 #include "contact_scenes.hpp"
+#include "detail/segment_triangle.hpp"
 
 #include <corocontact/contact/axis_ray.hpp>
 #include <corocontact/contact/detector.hpp>
@@ -19,6 +20,7 @@
 
 #include <array>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <random>
 #include <set>
@@ -31,14 +33,15 @@ using namespace coro::test;
 namespace {
 
 using Q = mpq_class;
+constexpr double INF = std::numeric_limits<double>::infinity();
 using QVec = std::array<Q, 3>;
 
 QVec rational(const Vec3& p) { return {Q(p.x()), Q(p.y()), Q(p.z())}; } // exact: a double is a rational
 
 /// The sign of det[b − a, c − a, d − a]: positive when d lies on the side of plane (a, b, c) its
 /// counter-clockwise normal points to. From the float determinant where it clears Shewchuk's
-/// error bound (orient3d's errboundA, which covers every rounding of its evaluation, plus 2⁻¹⁰⁰⁰
-/// for products that underflow), else in rationals.
+/// error bound (orient3d's errboundA, which covers every rounding of its evaluation, plus
+/// 2⁻¹⁰⁰⁰·(1 + the factors of the minors) for products that underflow), else in rationals.
 int orientation(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d)
 {
     const Vec3 ad = a - d, bd = b - d, cd = c - d; // det[a − d, b − d, c − d] = −det[b − a, c − a, d − a]
@@ -48,7 +51,8 @@ int orientation(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d)
                              std::abs(bd.x()) * (std::abs(cd.y() * ad.z()) + std::abs(cd.z() * ad.y())) +
                              std::abs(cd.x()) * (std::abs(ad.y() * bd.z()) + std::abs(ad.z() * bd.y()));
     const double epsilon = 0x1p-53;
-    if (std::abs(det) > (7.0 + 56.0 * epsilon) * epsilon * permanent + 0x1p-1000)
+    const double underflow = 0x1p-1000 * (1.0 + std::abs(ad.x()) + std::abs(bd.x()) + std::abs(cd.x()));
+    if (std::abs(det) > (7.0 + 56.0 * epsilon) * epsilon * permanent + underflow)
         return det > 0.0 ? -1 : 1;
     const QVec qa = rational(a), qb = rational(b), qc = rational(c), qd = rational(d);
     const Q u0 = qb[0] - qa[0], u1 = qb[1] - qa[1], u2 = qb[2] - qa[2];
@@ -73,7 +77,8 @@ bool in_closed_triangle(const QVec& a, const QVec& b, const QVec& c, const QVec&
         const int area = orientation_2d(a, b, c, i, j);
         if (area == 0)
             continue; // the triangle is edge-on in this projection
-        const int s0 = orientation_2d(a, b, p, i, j), s1 = orientation_2d(b, c, p, i, j), s2 = orientation_2d(c, a, p, i, j);
+        const int s0 = orientation_2d(a, b, p, i, j), s1 = orientation_2d(b, c, p, i, j),
+                  s2 = orientation_2d(c, a, p, i, j);
         return s0 * area >= 0 && s1 * area >= 0 && s2 * area >= 0;
     }
     return false; // a degenerate face holds no surface
@@ -92,7 +97,8 @@ struct ExactSurface {
     explicit ExactSurface(const ContactSurface& s)
     {
         for (Eigen::Index f = 0; f < s.faces.rows(); ++f) {
-            const Vec3 a = s.vertices.row(s.faces(f, 0)), b = s.vertices.row(s.faces(f, 1)), c = s.vertices.row(s.faces(f, 2));
+            const Vec3 a = s.vertices.row(s.faces(f, 0)), b = s.vertices.row(s.faces(f, 1)),
+                       c = s.vertices.row(s.faces(f, 2));
             corners.push_back({a, b, c});
             lo.push_back(a.cwiseMin(b).cwiseMin(c));
             hi.push_back(a.cwiseMax(b).cwiseMax(c));
@@ -197,7 +203,7 @@ void perturb(std::vector<Body>& bodies, std::mt19937& rng)
         for (int n = 0; n < 4; ++n) {
             double& c = x(std::uniform_int_distribution<Eigen::Index>(0, x.rows() - 1)(rng),
                           std::uniform_int_distribution<Eigen::Index>(0, 2)(rng));
-            const double toward = unit(rng) < 0.0 ? -INFINITY : INFINITY;
+            const double toward = unit(rng) < 0.0 ? -INF : INF;
             for (int k = std::uniform_int_distribution<int>(1, 4)(rng); k > 0; --k)
                 c = std::nextafter(c, toward);
         }
@@ -239,13 +245,14 @@ std::vector<Vec3> points_near_faces(const ContactSurface& s, int faces, std::mt1
     std::uniform_int_distribution<int> coordinate(0, 2);
     for (int n = 0; n < faces; ++n) {
         const Eigen::Index f = face(rng);
-        const Vec3 a = s.vertices.row(s.faces(f, 0)), b = s.vertices.row(s.faces(f, 1)), c = s.vertices.row(s.faces(f, 2));
+        const Vec3 a = s.vertices.row(s.faces(f, 0)), b = s.vertices.row(s.faces(f, 1)),
+                   c = s.vertices.row(s.faces(f, 2));
         for (const Vec3& on : {Vec3((a + b + c) / 3.0), Vec3(0.5 * (a + b)), Vec3(0.25 * a + 0.25 * b + 0.5 * c)}) {
             const int i = coordinate(rng);
             for (const int ulps : {-2, -1, 0, 1, 2}) {
                 Vec3 p = on;
                 for (int k = 0; k < std::abs(ulps); ++k)
-                    p[i] = std::nextafter(p[i], ulps > 0 ? INFINITY : -INFINITY);
+                    p[i] = std::nextafter(p[i], ulps > 0 ? INF : -INF);
                 points.push_back(p);
             }
         }
@@ -285,7 +292,8 @@ TEST(ExactReference, DetectionAgreesWithExactRationalsOnGridAndPerturbedScenes)
         std::vector<Body> bodies;
         const int count = std::uniform_int_distribution<int>(2, 3)(rng);
         for (int b = 0; b < count; ++b)
-            bodies.push_back(std::uniform_int_distribution<int>(0, 2)(rng) == 0 ? random_octahedron(rng) : random_box(rng));
+            bodies.push_back(std::uniform_int_distribution<int>(0, 2)(rng) == 0 ? random_octahedron(rng)
+                                                                                 : random_box(rng));
         perturb(bodies, rng);
         std::vector<ContactSurface> surfaces;
         for (std::size_t b = 0; b < bodies.size(); ++b)
@@ -343,13 +351,31 @@ TEST(ExactReference, DetectionAgreesWithExactRationalsOnGridAndPerturbedScenes)
                 inside, on_surface, outside, near_face[1], near_face[2], near_face[0], static_cast<long>(shared));
 }
 
+namespace {
+
+/// What segment_misses_triangle claims when it answers "misses", in exact signs: both ends
+/// strictly on one side of the triangle's plane, or the segment's line strictly on the left of
+/// one edge and strictly on the right of another.
+bool exactly_disjoint(const Vec3& p, const Vec3& q, const Vec3& a, const Vec3& b, const Vec3& c)
+{
+    const int sp = orientation(a, b, c, p), sq = orientation(a, b, c, q);
+    if (sp != 0 && sp == sq)
+        return true;
+    const int e0 = orientation(p, q, a, b), e1 = orientation(p, q, b, c), e2 = orientation(p, q, c, a);
+    return (e0 > 0 || e1 > 0 || e2 > 0) && (e0 < 0 || e1 < 0 || e2 < 0);
+}
+
+} // namespace
+
+
 TEST(ExactReference, SubnormalCoordinatesAreDecidedExactly)
 {
     // A box whose face y = 0 is tilted by a subnormal amount: its corner (1/2, 0, 5/4) moved to
     // y = k times the smallest subnormal. The point (9/16, k/2 of it, 33/32) lies on the tilted
     // face; points a few ulps and subnormal steps away lie on either side. The float products of
     // the orientation signs underflow there, which relative rounding bounds alone do not cover
-    // (found by the scenes above with another seed: a point on the surface was inside).
+    // (found by the scenes above with another seed: a point on the surface was inside). The same
+    // points start segments for the grouping's edge test.
     const TetMesh mesh = make_box(Vec3(0.25, 0.0, 0.375), Vec3(1.0, 0.375, 1.25), {3, 4, 1});
     const Tris faces = boundary_faces(mesh);
     const double tiny = std::numeric_limits<double>::denorm_min();
@@ -375,8 +401,62 @@ TEST(ExactReference, SubnormalCoordinatesAreDecidedExactly)
                     EXPECT_EQ(r.inside, side == Side::INSIDE) << "k " << k << ", point " << p.transpose();
                     EXPECT_EQ(r.on_surface, side == Side::ON_SURFACE) << "k " << k << ", point " << p.transpose();
                 }
+                // The grouping's edge test from p, a face at a time and TRIANGLE_LANES at once:
+                // "misses" must hold exactly.
+                for (const Vec3& q : {Vec3(p + Vec3(0.0, 1.0, 0.0)), Vec3(p + Vec3(0.125, -1.0, 0.25))})
+                    for (Eigen::Index first = 0; first < surface.faces.rows(); first += detail::TRIANGLE_LANES) {
+                        const double *a[detail::TRIANGLE_LANES], *b[detail::TRIANGLE_LANES], *c[detail::TRIANGLE_LANES];
+                        const int count = static_cast<int>(
+                            std::min<Eigen::Index>(detail::TRIANGLE_LANES, surface.faces.rows() - first));
+                        int singles = 0;
+                        for (int lane = 0; lane < count; ++lane) {
+                            const Eigen::Index face = first + lane;
+                            const Vec3 fa = surface.vertices.row(surface.faces(face, 0)),
+                                       fb = surface.vertices.row(surface.faces(face, 1)),
+                                       fc = surface.vertices.row(surface.faces(face, 2));
+                            a[lane] = &surface.vertices(surface.faces(face, 0), 0);
+                            b[lane] = &surface.vertices(surface.faces(face, 1), 0);
+                            c[lane] = &surface.vertices(surface.faces(face, 2), 0);
+                            if (detail::segment_misses_triangle(p.data(), q.data(), a[lane], b[lane], c[lane])) {
+                                singles |= 1 << lane;
+                                EXPECT_TRUE(exactly_disjoint(p, q, fa, fb, fc))
+                                    << "k " << k << ", segment from " << p.transpose() << ", face " << face;
+                            }
+                        }
+                        EXPECT_EQ(detail::segment_misses_triangles(p.data(), q.data(), a, b, c, count), singles);
+                    }
             }
     }
     for (const long n : sides)
         EXPECT_GT(n, 0);
 }
+
+TEST(ExactReference, PointsOnATinyFaceAreOnTheSurface)
+{
+    // A tetrahedron of edge 2⁻⁵⁴⁰: every float component of its faces' normals underflows to 0,
+    // so a projection chosen by them can be one where a face is edge-on.
+    const double s = std::ldexp(1.0, -540);
+    Positions v(4, 3);
+    v << 0, 0, 0, s, 0, 0, 0, s, 0, 0, 0, s;
+    Tris f(4, 3);
+    f << 0, 2, 1, 0, 1, 3, 0, 3, 2, 1, 2, 3;
+    const ContactSurface tetrahedron = ContactSurface::from_body("tiny", v, f);
+    const ExactSurface exact(tetrahedron);
+    const AxisRayTolerances tolerances;
+    const std::vector<Index> no_faces;
+    const double q = s / 4;
+    for (const Vec3& p : {Vec3(q, 0, q), Vec3(q, q, 0), Vec3(0, q, q), Vec3(q, q, q), Vec3(q, q, 2 * q),
+                          Vec3(q, q, 3 * q), Vec3(-q, q, q)}) {
+        const Side side = exact_side(exact, p);
+        for (const DetectionMode mode : {DetectionMode::EXACT, DetectionMode::BRUTE_FORCE}) {
+            const InsideTest r = inside_test(tetrahedron, p, mode, no_faces, tolerances);
+            EXPECT_EQ(r.inside, side == Side::INSIDE) << "point " << p.transpose() / q << " × s/4";
+            EXPECT_EQ(r.on_surface, side == Side::ON_SURFACE) << "point " << p.transpose() / q << " × s/4";
+        }
+    }
+    // The points chosen cover all three answers.
+    EXPECT_EQ(exact_side(exact, Vec3(q, 0, q)), Side::ON_SURFACE);
+    EXPECT_EQ(exact_side(exact, Vec3(q, q, q)), Side::INSIDE);
+    EXPECT_EQ(exact_side(exact, Vec3(q, q, 3 * q)), Side::OUTSIDE);
+}
+

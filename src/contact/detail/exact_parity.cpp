@@ -17,31 +17,36 @@ int orient3d(const double* A, const double* B, const double* C, const double* D)
     const FaceNormal normal = face_normal(A, B, C);
     const double d[3] = {D[0] - A[0], D[1] - A[1], D[2] - A[2]};
     const double value = normal.n[0] * d[0] + normal.n[1] * d[1] + normal.n[2] * d[2];
-    const double bound = ORIENT3D_BOUND * (normal.permanent[0] * std::abs(d[0]) +
-                                           normal.permanent[1] * std::abs(d[1]) + normal.permanent[2] * std::abs(d[2])) +
-                         UNDERFLOW_BOUND * (1.0 + std::abs(d[0]) + std::abs(d[1]) + std::abs(d[2]));
+    const double bound =
+        ORIENT3D_BOUND * (normal.permanent[0] * std::abs(d[0]) + normal.permanent[1] * std::abs(d[1]) +
+                          normal.permanent[2] * std::abs(d[2])) +
+        UNDERFLOW_BOUND * (1.0 + std::abs(d[0]) + std::abs(d[1]) + std::abs(d[2]));
     if (std::abs(value) > bound)
         return value > 0.0 ? 1 : -1;
     return -exact_plane_side(A, B, C, D); // that one is the sign of n·(A − D)
 }
 
-/// P exactly in the closed triangle (A, B, C), P exactly on its plane: the 2D signs in the
-/// coordinate plane where the triangle's projection is largest (not degenerate).
+/// P exactly in the closed triangle (A, B, C), P exactly on its plane: the 2D signs in a
+/// coordinate plane where the triangle's projection is not degenerate, trying first the one where
+/// the float normal says it is largest (for a tiny face every float component may underflow to 0).
 bool in_closed_triangle(const double* A, const double* B, const double* C, const double* P)
 {
     const FaceNormal normal = face_normal(A, B, C);
-    int a = 0;
+    int largest = 0;
     for (int j = 1; j < 3; ++j)
-        if (std::abs(normal.n[j]) > std::abs(normal.n[a]))
-            a = j;
-    const int u = (a + 1) % 3, v = (a + 2) % 3;
-    const int s0 = exact_orient2d(P[u], P[v], B[u], B[v], C[u], C[v]);
-    const int s1 = exact_orient2d(P[u], P[v], C[u], C[v], A[u], A[v]);
-    const int s2 = exact_orient2d(P[u], P[v], A[u], A[v], B[u], B[v]);
-    const int area = exact_orient2d(A[u], A[v], B[u], B[v], C[u], C[v]);
-    if (area == 0) // a degenerate face: no area to be in
-        return false;
-    return s0 * area >= 0 && s1 * area >= 0 && s2 * area >= 0;
+        if (std::abs(normal.n[j]) > std::abs(normal.n[largest]))
+            largest = j;
+    for (int k = 0; k < 3; ++k) {
+        const int a = (largest + k) % 3, u = (a + 1) % 3, v = (a + 2) % 3;
+        const int area = exact_orient2d(A[u], A[v], B[u], B[v], C[u], C[v]);
+        if (area == 0) // the face is edge-on in this projection
+            continue;
+        const int s0 = exact_orient2d(P[u], P[v], B[u], B[v], C[u], C[v]);
+        const int s1 = exact_orient2d(P[u], P[v], C[u], C[v], A[u], A[v]);
+        const int s2 = exact_orient2d(P[u], P[v], A[u], A[v], B[u], B[v]);
+        return s0 * area >= 0 && s1 * area >= 0 && s2 * area >= 0;
+    }
+    return false; // a degenerate face: no area to be in
 }
 
 enum class SegmentMeets { MISSES, CROSSES, EDGE_OR_VERTEX };

@@ -14,11 +14,12 @@ constexpr double EPS = std::numeric_limits<double>::epsilon();
 // ccwerrboundA ≈ 3ε/2 and o3derrboundA ≈ 7ε/2, ε = 2^-53, taken with a safety factor).
 constexpr double ORIENT2D_BOUND = 3.0 * EPS;
 constexpr double ORIENT3D_BOUND = 8.0 * EPS;
-// Those bounds hold while no product underflows. One that does (subnormal coordinates or
-// differences) errs by up to 2⁻¹⁰⁷⁵ more, absolutely; a sign sums a few such errors, multiplied
-// at most once more by a difference d: so each bound adds UNDERFLOW_BOUND, times 1 + Σ_j |d_j|
-// where its products are multiplied again. Only values below ~2⁻¹⁰⁰⁰ feel it (then the exact
-// signs decide).
+/// Absolute allowance for underflow. The bounds above hold while no product underflows (falls
+/// below 2⁻¹⁰²², from tiny coordinates or differences). One that does errs by up to 2⁻¹⁰⁷⁵ more,
+/// absolutely, and additions lose nothing to underflow: a sign sums a few such errors, multiplied
+/// at most once more by a difference d, in all below 2⁻¹⁰⁷³·(1 + Σ_j |d_j|). So each bound adds
+/// UNDERFLOW_BOUND, times 1 + Σ_j |d_j| where its products are multiplied again: a margin of
+/// 2¹³; only values below ~2⁻¹⁰⁰⁰ feel it (the exact signs decide them).
 constexpr double UNDERFLOW_BOUND = 0x1p-1060;
 
 /// n = (B − A) × (C − A) from rounded differences, and per component the sum of the absolute
