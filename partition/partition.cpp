@@ -3,7 +3,7 @@
 #include <corocontact/core/error.hpp>
 
 #include <metis.h>
-#include <tbb/info.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <numeric>
@@ -43,7 +43,10 @@ double TetPartition::imbalance() const
 
 Index default_num_parts(Index num_tets, Index parts_per_thread)
 {
-    const Index cores = static_cast<Index>(tbb::info::default_concurrency());
+    // The machine's online cores, not the process's CPU set (TBB's default concurrency follows
+    // that): `mpirun` binds each rank to a core and `taskset` narrows it, and the partition, and
+    // with it the bits of every result, would change with them.
+    const Index cores = std::max<Index>(1, static_cast<Index>(sysconf(_SC_NPROCESSORS_ONLN)));
     return std::max<Index>(1, std::min<Index>(parts_per_thread * cores, num_tets / MIN_TETS_PER_PART));
 }
 

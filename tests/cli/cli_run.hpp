@@ -38,10 +38,12 @@ inline std::string slurp(const std::filesystem::path& path)
 
 /// Runs `corocontact ARGUMENTS` in the shell, stdout and stderr kept in `dir`; `environment`
 /// (e.g. "CORO_DEBUG=1") is set for that command only.
-inline Outcome run(const std::string& arguments, const std::filesystem::path& dir, const std::string& environment = "")
+inline Outcome run(const std::string& arguments, const std::filesystem::path& dir, const std::string& environment = "",
+                   const std::string& launcher = "")
 {
     const std::filesystem::path out = dir / "stdout.txt", err = dir / "stderr.txt";
-    const std::string command = (environment.empty() ? "" : "env " + environment + " ") + std::string(CORO_CLI_PATH) +
+    const std::string command = (environment.empty() ? "" : "env " + environment + " ") +
+                                (launcher.empty() ? "" : launcher + " ") + std::string(CORO_CLI_PATH) +
                                 " " + arguments + " > " + out.string() + " 2> " + err.string() + " < /dev/null";
     const int status = std::system(command.c_str());
     return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, slurp(out), slurp(err)};

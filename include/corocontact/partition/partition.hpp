@@ -34,9 +34,10 @@ TetPartition partition_tets(const Tets& tets, Index num_vertices, Index num_part
 /// scene batches them into its work items (sim/scene_system.hpp).
 constexpr Index MIN_TETS_PER_PART = 2048;
 
-/// Default number of parts of a body: `parts_per_thread` × the machine's cores (the process's
-/// default TBB concurrency, which --threads does not change, so 1 and 2 threads partition
-/// alike and give identical results), at most one part per MIN_TETS_PER_PART tets, at least 1.
+/// Default number of parts of a body: `parts_per_thread` × the machine's online cores (not
+/// --threads, nor the CPU set a process is bound to, so 1 and 2 threads and every MPI binding
+/// partition alike and give identical results), at most one part per MIN_TETS_PER_PART tets, at
+/// least 1.
 Index default_num_parts(Index num_tets, Index parts_per_thread);
 
 } // namespace coro
