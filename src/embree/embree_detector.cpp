@@ -101,7 +101,8 @@ std::vector<Disagreement> cross_check(const std::vector<ContactPoint>& axis_ray,
         std::vector<Key> k;
         k.reserve(points.size());
         for (const ContactPoint& c : points)
-            k.emplace_back(c.body, c.vertex, c.other.index);
+            if (c.other.is_surface()) // Embree sees surfaces only, not plane obstacles
+                k.emplace_back(c.body, c.vertex, c.other.index);
         std::sort(k.begin(), k.end());
         k.erase(std::unique(k.begin(), k.end()), k.end());
         return k;

@@ -522,6 +522,16 @@ TEST(CrossCheck, ListsVerticesFoundByOnlyOneSide)
     EXPECT_TRUE(cross_check(axis_ray, axis_ray).empty());
 }
 
+TEST(CrossCheck, LeavesPlaneContactsOut)
+{
+    // A run's contacts hold plane contacts too (plane 1 here, not surface 1); Embree never finds them.
+    ContactPoint on_plane = point(0, 2, 0);
+    on_plane.other = ContactTarget::plane(1);
+    const std::vector<ContactPoint> axis_ray{point(0, 1, 1), on_plane};
+    const std::vector<ContactPoint> embree{point(0, 1, 1)};
+    EXPECT_TRUE(cross_check(axis_ray, embree).empty());
+}
+
 TEST(CrossCheck, CountsDepthDisagreementsOfVerticesBothFoundInside)
 {
     const auto point = [](Index body, Index vertex, Index face, double depth) {

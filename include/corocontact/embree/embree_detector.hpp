@@ -56,8 +56,9 @@ std::vector<ContactPoint> detect_contacts_embree(const std::vector<ContactSurfac
                                                  const EmbreeScenes& scenes, const DetectionSettings& settings,
                                                  DetectionStats* stats = nullptr);
 
-/// Vertices on which Embree and the axis-ray detector disagree about inside/outside (of the
-/// detectors' output: every point's other is a surface).
+/// Vertices on which Embree and the axis-ray detector disagree about inside/outside. Points
+/// whose other is a plane obstacle are left out of both lists: a run's contacts hold them too,
+/// and Embree, which traces surfaces only, never finds them.
 struct Disagreement {
     Index body = -1;
     Index vertex = -1;
