@@ -699,7 +699,7 @@ void read_contact(const TableReader& root, ContactSettings& s)
                                    {{"exact", ContactMode::EXACT}, {"paper", ContactMode::PAPER}});
     s.stiffness = t.number("stiffness", s.stiffness, POSITIVE);
     s.damping = t.number("damping", s.damping, NON_NEGATIVE);
-    s.friction = t.number("friction", s.friction, NON_NEGATIVE);
+    s.friction = t.number("friction", s.friction, Range{0.0, MAX_FRICTION, false, false});
     s.cross_check = t.choice<CrossCheck>("cross_check", s.cross_check,
                                          {{"none", CrossCheck::NONE}, {"embree", CrossCheck::EMBREE}});
 }

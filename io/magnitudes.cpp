@@ -16,8 +16,10 @@ namespace {
 constexpr double LOG_LOW = -140.0;
 constexpr double LOG_HIGH = 140.0;
 constexpr double LOG_MAX_COORDINATE_PER_EDGE = 10.0;
-/// log10 of the largest dt²·(λ+2μ)/(ρ·h²) the implicit step accepts; see check_stiffness_to_mass_ratio.
+/// log10 of the largest dt²·(λ+2μ)/(ρ·h²) the implicit step accepts with double and with single
+/// matrix values; see check_stiffness_to_mass_ratio.
 constexpr double LOG_MAX_STIFFNESS_TO_MASS = 10.0;
+constexpr double LOG_MAX_STIFFNESS_TO_MASS_SINGLE = 4.0;
 
 /// "3.2e-600" for 10^log10, also beyond the range of double.
 std::string power_text(double log10)
@@ -122,8 +124,13 @@ private:
 /// free body's motion (rigid-body modes have no stiffness), keeps 16 − log10(r) of them: the
 /// error of the motion grows as r × 1e-16 (measured on a free falling box: 1e-4 of the fall at
 /// r = 5e11, half of it at r = 5e13, none at r = 5e15, where PCG also meets pᵀAp = 0). Up to
-/// r = 1e10 it stays below the default PCG tolerance, 1e-6.
-void check_stiffness_to_mass_ratio(const SimulationSettings& sim, const BodySpec& body, double shortest_edge)
+/// r = 1e10 it stays below the default PCG tolerance, 1e-6. Single-precision matrix values keep
+/// about 7 digits, so the same loss starts at far smaller r: on that box (2×2×2 cells, dt 0.01,
+/// 10 steps) the fall was wrong by 3e-4 of itself at r = 1e3, 9e-4 at 1e4, 9e-3 at 1e5 and 0.27
+/// at 1e6, with a spurious spread of the nodes of 3.6e-3, 2.7e-2 and 0.09 of the fall from 1e4
+/// on; single values are refused beyond r = 1e4.
+void check_stiffness_to_mass_ratio(const SimulationSettings& sim, const SolverSettings& solver, const BodySpec& body,
+                                   double shortest_edge)
 {
     if (sim.analysis != Analysis::DYNAMIC)
         return; // a static step has no mass term
@@ -133,9 +140,11 @@ void check_stiffness_to_mass_ratio(const SimulationSettings& sim, const BodySpec
     // In log space: the factors may each be near the end of double's range.
     const double log_ratio = 2.0 * std::log10(sim.dt) + std::log10(m.young) + std::log10(p_modulus_factor) -
                              std::log10(m.density) - 2.0 * std::log10(shortest_edge);
-    if (log_ratio <= LOG_MAX_STIFFNESS_TO_MASS)
+    const bool single = solver.matrix_precision == MatrixPrecision::SINGLE;
+    const double log_max = single ? LOG_MAX_STIFFNESS_TO_MASS_SINGLE : LOG_MAX_STIFFNESS_TO_MASS;
+    if (log_ratio <= log_max)
         return;
-    const double headroom = std::pow(10.0, LOG_MAX_STIFFNESS_TO_MASS - log_ratio); // < 1
+    const double headroom = std::pow(10.0, log_max - log_ratio); // < 1
     std::ostringstream bound;
     bound.precision(3);
     bound << "simulation.dt at most " << sim.dt * std::sqrt(headroom) << ", young at most "
@@ -146,8 +155,12 @@ void check_stiffness_to_mass_ratio(const SimulationSettings& sim, const BodySpec
                                << " (from simulation.dt = " << sim.dt << ", young = " << m.young
                                << ", poisson = " << nu << ", density = " << m.density
                                << " and the shortest edge h = " << shortest_edge
-                               << "), expected at most 1e+10: beyond that, double precision loses the mass in the "
-                                  "step's matrix and with it the body's free motion; use "
+                               << "), expected at most " << power_text(log_max)
+                               << (single ? " with solver.matrix_precision = \"single\": beyond that, float values lose "
+                                            "the mass in the step's matrix and with it the body's free motion; use "
+                                            "matrix_precision = \"double\" (up to 1e+10), or "
+                                          : ": beyond that, double precision loses the mass in the step's matrix and "
+                                            "with it the body's free motion; use ")
                                << bound.str() << " (other values unchanged)");
 }
 
@@ -237,7 +250,7 @@ void check_magnitudes(const CaseSpec& spec, const BodySpec& body, const TetMesh&
                                       "keep fewer than six significant digits of an edge, and strains would be "
                                       "rounding noise); move the body nearer the origin (translate) or use another "
                                       "length unit");
-    check_stiffness_to_mass_ratio(sim, body, g.shortest_edge);
+    check_stiffness_to_mass_ratio(sim, spec.solver, body, g.shortest_edge);
 }
 
 } // namespace coro::detail

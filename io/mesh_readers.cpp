@@ -33,6 +33,7 @@ using detail::read_file;
 using detail::trimmed;
 
 using detail::MSH_TET4;
+using detail::refuse_other_volume_element;
 using detail::MshBuilder;
 
 /// Returns the next line, which must hold data (not a `$Section` line, not the end of file).
@@ -250,8 +251,10 @@ void read_elements_v22(LineCursor& cursor, MshBuilder& builder)
                       cursor);
         const std::uint64_t tag = tokens.next_count("element tag");
         const int type = tokens.next_int("element type");
-        if (type != MSH_TET4)
+        if (type != MSH_TET4) {
+            refuse_other_volume_element(type, cursor.where());
             continue;
+        }
         const std::uint64_t n_tags = tokens.next_count("the number of element tags");
         CORO_CHECK(n_tags <= tokens.remaining(), InputError,
                    cursor.where() << ": expected " << n_tags
@@ -298,6 +301,7 @@ void read_elements_v41(LineCursor& cursor, MshBuilder& builder)
         const std::uint64_t in_block = block.next_count("the number of elements in the block");
         block.expect_end("'entityDim entityTag elementType numElementsInBlock'");
         const long block_line = cursor.line();
+        refuse_other_volume_element(type, cursor.where());
         if (type == MSH_TET4)
             builder.reserve_elements(in_block);
         for (std::uint64_t i = 0; i < in_block; ++i) {
@@ -403,6 +407,8 @@ TetMesh read_msh(const std::filesystem::path& path)
 
 TetMesh read_tet_mesh(const std::filesystem::path& path)
 {
+    CORO_CHECK(!std::filesystem::is_directory(path), InputError,
+               path.string() << ": is a directory, expected a mesh file");
     std::string extension = path.extension().string();
     std::transform(extension.begin(), extension.end(), extension.begin(),
                    [](unsigned char c) { return static_cast<char>(std::tolower(c)); });

@@ -256,6 +256,7 @@ void read_elements_v22(ByteReader& in, MshBuilder& builder)
             return std::to_string(in_group) + " elements of type " + std::to_string(type) +
                    " in the group at byte " + std::to_string(group_at);
         });
+        refuse_other_volume_element(type, in.where(group_at));
         if (type == MSH_TET4)
             builder.reserve_elements(in_group);
         for (std::uint64_t e = 0; e < in_group; ++e) {
@@ -382,6 +383,7 @@ void read_elements_v41(ByteReader& in, MshBuilder& builder)
             return std::to_string(in_block) + " elements of type " + std::to_string(type) +
                    " in the block at byte " + std::to_string(block_at);
         });
+        refuse_other_volume_element(type, in.where(block_at));
         if (type == MSH_TET4)
             builder.reserve_elements(in_block);
         for (std::uint64_t e = 0; e < in_block; ++e) {

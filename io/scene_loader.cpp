@@ -31,6 +31,35 @@ void warn_if_open(const Tris& faces, const std::string& what, std::vector<std::s
     warnings.push_back(message.str());
 }
 
+/// A closed, consistently oriented surface whose normals point inward (negative enclosed volume)
+/// is turned outward, with a warning: contact takes the side its normals point to as the outside,
+/// so inward normals would put every other body's vertex inside it "outside" (no contact ever).
+void orient_outward(SurfaceMesh& surface, const std::string& what, std::vector<std::string>& warnings)
+{
+    if (!check_surface(surface.faces).closed_and_oriented() || !(enclosed_volume(surface.vertices, surface.faces) < 0.0))
+        return;
+    surface.faces.col(1).swap(surface.faces.col(2));
+    warnings.push_back(what + " had inward normals; its faces were flipped");
+}
+
+/// A warning when nodes of tets lie exactly where other nodes lie: the tets on either side are
+/// then separate pieces that touch without being joined, and move apart under load.
+void warn_if_coincident(const TetMesh& mesh, const std::string& what, std::vector<std::string>& warnings)
+{
+    const std::vector<std::array<Index, 2>> pairs = coincident_vertices(mesh);
+    if (pairs.empty())
+        return;
+    const auto [first, other] = pairs.front();
+    const auto& x = mesh.rest_positions;
+    std::ostringstream message;
+    message << what << ": " << pairs.size() << (pairs.size() == 1 ? " node lies" : " nodes lie")
+            << " exactly where another node lies (e.g. nodes " << first << " and " << other << " at (" << x(first, 0)
+            << ", " << x(first, 1) << ", " << x(first, 2)
+            << "); nodes counted from 0 in file order); they are not joined, so the tets on either side are "
+               "separate pieces that can move apart: merge duplicate nodes in the mesher";
+    warnings.push_back(message.str());
+}
+
 /// A box load is split over the nodes in its box; the share of a fixed node has no effect, so
 /// less force acts than the case says.
 void warn_about_loads_on_fixed_nodes(const Body& body, const BodySpec& spec, std::vector<std::string>& warnings)
@@ -155,6 +184,8 @@ TetMesh load_body_mesh(const BodySpec& spec, std::vector<std::string>& warnings)
                     << " tets had negative volume and were reoriented";
             warnings.push_back(message.str());
         }
+        if (spec.shape == BodyShape::MESH)
+            warn_if_coincident(mesh, who + ": mesh " + source, warnings);
         if (spec.shape == BodyShape::MESH && spec.surface.empty())
             warn_if_open(boundary_faces(mesh), who + ": the boundary of mesh " + source, warnings);
     } catch (const InputError& error) {
@@ -212,6 +243,7 @@ LoadedScene load_scene(const CaseSpec& spec, const LoadProgress& progress)
             warn_if_open(surface.faces, who, loaded.warnings);
             body_spec.transform.apply(surface.vertices);
             check_surface_coordinates(surface, who);
+            orient_outward(surface, who, loaded.warnings);
             detail::reject_surface_far_outside(body.mesh(), surface, who);
             body.embed_surface(std::move(surface));
             detail::check_embedding(body, who, loaded.warnings);
@@ -250,11 +282,7 @@ LoadedScene load_scene(const CaseSpec& spec, const LoadProgress& progress)
                                      << " is not a closed, consistently oriented surface (" << check.open_edges
                                      << " open, " << check.nonmanifold_edges << " non-manifold, "
                                      << check.misoriented_edges << " misoriented edges)");
-        if (enclosed_volume(surface.vertices, surface.faces) < 0.0) {
-            surface.faces.col(1).swap(surface.faces.col(2));
-            loaded.warnings.push_back(obstacle.location + ": obstacle mesh " + obstacle.mesh.string() +
-                                      " had inward normals; its faces were flipped");
-        }
+        orient_outward(surface, obstacle.location + ": obstacle mesh " + obstacle.mesh.string(), loaded.warnings);
         loaded.scene.obstacle_meshes.push_back(std::move(surface));
     }
     return loaded;

@@ -931,6 +931,8 @@ void append_vertices(TextOut& out, const SurfaceMesh& surface, std::string_view 
 
 SurfaceMesh read_surface(const std::filesystem::path& path)
 {
+    CORO_CHECK(!std::filesystem::is_directory(path), InputError,
+               path.string() << ": is a directory, expected a surface file");
     std::string extension = path.extension().string();
     std::transform(extension.begin(), extension.end(), extension.begin(), lower);
     CORO_CHECK(extension == ".obj" || extension == ".stl" || extension == ".off", InputError,

@@ -263,6 +263,8 @@ void CaseRun::set_contact_friction(double friction)
 {
     check_contact_applies("contact.friction");
     check_number(friction, false, "contact.friction");
+    CORO_CHECK(friction <= MAX_FRICTION, InputError,
+               "contact.friction: expected a number in [0, " << MAX_FRICTION << "], found " << friction);
     m_spec.contact.friction = friction;
     m_simulation->update_contact_response();
 }

@@ -89,7 +89,7 @@ public:
     std::optional<std::string> loads_on_fixed_nodes(Index body) const;
     /// @param[in] gravity  [m/s²]
     void set_gravity(const Vec3& gravity);
-    /// [contact] stiffness (> 0), damping (≥ 0), friction (≥ 0).
+    /// [contact] stiffness (> 0), damping (≥ 0), friction (in [0, MAX_FRICTION]).
     /// @throws InputError if the case has contact disabled
     void set_contact_stiffness(double stiffness);
     void set_contact_damping(double damping);

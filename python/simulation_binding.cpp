@@ -326,7 +326,7 @@ written.)doc")
         .def_property(
             "contact_friction", [](SimulationObject& self) { return self.run->get().spec().contact.friction; },
             [](SimulationObject& self, double value) { self.run->get().set_contact_friction(value); },
-            "[contact] friction, the Coulomb coefficient, >= 0")
+            "[contact] friction, the Coulomb coefficient, in [0, 10]")
         .def_property_readonly("name", [](SimulationObject& self) { return self.run->get().spec().simulation.name; })
         .def_property_readonly("analysis", [](SimulationObject& self) { return analysis_name(self.run->get().spec().simulation.analysis); })
         .def_property_readonly("dt", [](SimulationObject& self) { return self.run->get().spec().simulation.dt; })

@@ -91,6 +91,14 @@ CLI::Validator whole_number(long long min, long long max)
         min == 1 ? "POSITIVE" : "FROM " + std::to_string(min)); // --help: "INT:POSITIVE"
 }
 
+/// A CLI11 check for a file or directory argument: an empty one (an unset shell variable in
+/// `--out "$DIR"`) would otherwise read as "not given" and write to the default place.
+CLI::Validator path_given()
+{
+    return CLI::Validator([](std::string& text) -> std::string { return text.empty() ? "expected a path, found ''" : ""; },
+                          "PATH");
+}
+
 constexpr long long INDEX_MAX = std::numeric_limits<coro::Index>::max();
 
 /// The threads TBB runs at most: --threads (or all cores), but never more than the arena has.
@@ -556,8 +564,15 @@ int describe_mesh(const std::string& path, int parts)
     std::printf("  volume %.9g\n", coro::total_volume(mesh));
     print_bounds(mesh.rest_positions);
     std::printf("  quality (mean ratio, 1 = regular): min %.4f, mean %.4f\n", q_min, q_sum / mesh.num_tets());
-    std::printf("  reoriented tets %d, nodes in no tet %zu\n", reoriented, coro::unreferenced_vertices(mesh).size());
+    const std::vector<std::array<coro::Index, 2>> coincident = coro::coincident_vertices(mesh);
+    std::printf("  reoriented tets %d, nodes in no tet %zu, nodes where another node lies %zu\n", reoriented,
+                coro::unreferenced_vertices(mesh).size(), coincident.size());
     std::printf("  boundary surface %s\n", describe_topology(topology).c_str());
+    if (!coincident.empty())
+        std::fprintf(stderr,
+                     "warning: %zu nodes lie exactly where another node lies (e.g. nodes %d and %d, counted from 0 in "
+                     "file order); they are not joined, so the tets on either side are separate pieces\n",
+                     coincident.size(), coincident.front()[0], coincident.front()[1]);
     if (parts > mesh.num_tets()) {
         std::fprintf(stderr, "note: --parts %d: the mesh has %s, and a part holds at least one; using %d parts\n",
                      parts, count_of(static_cast<std::size_t>(mesh.num_tets()), "tet", "tets").c_str(),
@@ -583,6 +598,10 @@ int describe_mesh(const std::string& path, int parts)
 
 int main(int argc, char** argv)
 {
+    // A closed pipe (`corocontact run case.toml | head -1`) makes a write fail with EPIPE, which
+    // the run reports (exit 4) after finishing its frames and removing its output lock, rather
+    // than killing the process with the lock left behind.
+    std::signal(SIGPIPE, SIG_IGN);
 #if CORO_WITH_MPI
     // Started by mpirun: the processes of a distributed run (docs/scale_out.md); alone: no MPI.
     std::unique_ptr<coro::MpiSession> session;
@@ -617,8 +636,8 @@ int main(int argc, char** argv)
 
     RunOptions run;
     CLI::App* run_command = app.add_subcommand("run", "simulate a case into a VTK series");
-    run_command->add_option("case", run.case_file, "case file (.toml)")->required();
-    run_command->add_option("--out", run.out, "output directory (overrides simulation.output_dir)");
+    run_command->add_option("case", run.case_file, "case file (.toml)")->required()->check(path_given());
+    run_command->add_option("--out", run.out, "output directory (overrides simulation.output_dir)")->check(path_given());
     threads_option(run_command);
     verbose_flag(run_command, "");
     run_command->add_option("--steps", run.steps, "number of time steps (overrides simulation.steps)")
@@ -628,18 +647,20 @@ int main(int argc, char** argv)
                             "save the whole state to OUT/NAME.checkpoint every N steps (and at the end)")
         ->check(whole_number(1, INDEX_MAX));
     run_command->add_option("--restart", run.restart,
-                            "continue the run saved in a checkpoint file of this case to its last step");
+                            "continue the run saved in a checkpoint file of this case to its last step")
+        ->check(path_given());
     run_command->set_version_flag("--version", std::string("corocontact ") + CORO_VERSION);
 
     DetectOptions detect;
     CLI::App* detect_command =
         app.add_subcommand("detect", "contact detection on the initial configuration, optionally as CSV");
-    detect_command->add_option("case", detect.case_file, "case file (.toml)")->required();
+    detect_command->add_option("case", detect.case_file, "case file (.toml)")->required()->check(path_given());
     detect_command->add_option("--mode", detect.mode, "exact (default) or paper; overrides [contact] mode")
         ->check(CLI::IsMember({"exact", "paper"}));
     detect_command->add_option("--cross-check", detect.cross_check, "also detect with Embree and count disagreements")
         ->check(CLI::IsMember({"embree"}));
-    detect_command->add_option("--csv", detect.csv, "write body,vertex,other,depth rows to FILE (- for stdout)");
+    detect_command->add_option("--csv", detect.csv, "write body,vertex,other,depth rows to FILE (- for stdout)")
+        ->check(path_given());
     verbose_flag(detect_command, "; with --cross-check, list the vertices on which Embree disagrees");
     threads_option(detect_command);
     detect_command->set_version_flag("--version", std::string("corocontact ") + CORO_VERSION);
@@ -647,7 +668,7 @@ int main(int argc, char** argv)
     std::string mesh_path;
     CLI::App* info_command = app.add_subcommand(
         "info", "counts, bounds, volume, quality and topology of a tet mesh or a triangle surface (.obj, .stl, .off)");
-    info_command->add_option("mesh", mesh_path, "tet mesh or surface file")->required();
+    info_command->add_option("mesh", mesh_path, "tet mesh or surface file")->required()->check(path_given());
     int parts = 0;
     info_command->add_option("--parts", parts, "tet mesh: also partition into K METIS parts: edge-cut and balance")
         ->check(whole_number(1, INDEX_MAX));
@@ -680,8 +701,9 @@ int main(int argc, char** argv)
         thread_limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,
                                                              static_cast<std::size_t>(threads));
         if (threads_used() < threads && root)
-            std::cerr << "note: --threads " << threads << ": this machine runs at most " << threads_used()
-                      << " threads at once; using " << threads_used() << "\n";
+            std::cerr << "note: --threads " << threads << ": this process may run on " << threads_used()
+                      << (threads_used() == 1 ? " core" : " cores") << " only; using " << threads_used()
+                      << (threads_used() == 1 ? " thread" : " threads") << "\n";
     }
     std::ostream& errors = root ? std::cerr : null_stream();
     const auto dispatch = [&]() -> int {

@@ -21,8 +21,46 @@ namespace coro::detail {
 constexpr std::size_t MSH_MIN_NODE_BYTES = 8;
 constexpr std::size_t MSH_MIN_ELEMENT_BYTES = 10;
 
-/// Gmsh element type of the 4-node tetrahedron; every other type is skipped.
+/// Gmsh element type of the 4-node tetrahedron; points, lines and surface elements are skipped,
+/// other volume elements refused (msh_other_volume_element).
 constexpr int MSH_TET4 = 4;
+
+/// The name of a Gmsh volume element type other than the 4-node tetrahedron ("10-node
+/// tetrahedron", "hexahedron", ...), or null for the tet and for points, lines and surfaces,
+/// which a mesh carries for its physical groups and the reader skips. A volume element of
+/// another type is refused: skipped, its volume would be missing from the body.
+inline const char* msh_other_volume_element(int type)
+{
+    switch (type) {
+    case 5: return "8-node hexahedron";
+    case 6: return "6-node prism";
+    case 7: return "5-node pyramid";
+    case 11: return "10-node tetrahedron";
+    case 12: return "27-node hexahedron";
+    case 13: return "18-node prism";
+    case 14: return "14-node pyramid";
+    case 17: return "20-node hexahedron";
+    case 18: return "15-node prism";
+    case 19: return "13-node pyramid";
+    case 29: return "20-node tetrahedron";
+    case 30: return "35-node tetrahedron";
+    case 31: return "56-node tetrahedron";
+    case 92: return "64-node hexahedron";
+    case 93: return "125-node hexahedron";
+    default: return nullptr;
+    }
+}
+
+/// Refuses an element of `type` when it is a volume element other than the 4-node tetrahedron.
+/// @param[in] where  the place in the file, for the message ("mesh.msh:12")
+inline void refuse_other_volume_element(int type, const std::string& where)
+{
+    if (const char* name = msh_other_volume_element(type))
+        CORO_THROW(InputError, where << ": element type " << type << " (" << name
+                                     << ") is a volume element corocontact cannot use; expected 4-node "
+                                        "tetrahedra (type 4) only: mesh the body with linear tets (Gmsh: "
+                                        "-order 1 and no recombination)");
+}
 
 /// Number of nodes of a Gmsh element type (the table of the MSH format documentation), or 0
 /// for a type this table does not know. Binary files need it to skip elements of other types.

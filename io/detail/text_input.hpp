@@ -11,6 +11,7 @@
 #include <cstring>
 #include <filesystem>
 #include <memory>
+#include <new>
 #include <string>
 #include <string_view>
 #include <system_error>
@@ -54,13 +55,27 @@ inline std::string read_file(const std::filesystem::path& path, const char* kind
     CORO_CHECK(std::filesystem::exists(status), InputError, path.string() << ": " << kind << " does not exist");
     CORO_CHECK(!std::filesystem::is_directory(status), InputError,
                path.string() << ": is a directory, expected a " << kind);
+    // A pipe is read like a file; a device (/dev/zero, /dev/urandom) would be read without end.
+    CORO_CHECK(std::filesystem::is_regular_file(status) || std::filesystem::is_fifo(status), InputError,
+               path.string() << ": is a device or socket, expected a " << kind);
     const std::unique_ptr<std::FILE, int (*)(std::FILE*)> file(std::fopen(path.c_str(), "rb"), &std::fclose);
     CORO_CHECK(file != nullptr, InputError, path.string() << ": cannot open the " << kind << ": " << std::strerror(errno));
     std::string text;
     std::array<char, 1 << 16> buffer{};
     std::size_t n = 0;
-    while ((n = std::fread(buffer.data(), 1, buffer.size(), file.get())) > 0)
-        text.append(buffer.data(), n);
+    bool out_of_memory = false;
+    try {
+        while ((n = std::fread(buffer.data(), 1, buffer.size(), file.get())) > 0)
+            text.append(buffer.data(), n);
+    } catch (const std::bad_alloc&) {
+        out_of_memory = true;
+    }
+    if (out_of_memory) {
+        const std::size_t read = text.size();
+        std::string().swap(text); // the memory back before the message is made
+        CORO_THROW(InputError, path.string() << ": the " << kind << " does not fit in memory (" << read
+                                             << " bytes read when an allocation failed)");
+    }
     CORO_CHECK(!std::ferror(file.get()), InputError,
                path.string() << ": read error in the " << kind << ": " << std::strerror(errno));
     return text;

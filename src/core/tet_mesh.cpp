@@ -236,4 +236,29 @@ std::vector<Index> unreferenced_vertices(const TetMesh& mesh)
     return unused;
 }
 
+std::vector<std::array<Index, 2>> coincident_vertices(const TetMesh& mesh)
+{
+    std::vector<char> used(static_cast<std::size_t>(mesh.num_vertices()), 0);
+    for (Index t = 0; t < mesh.num_tets(); ++t)
+        for (int a = 0; a < 4; ++a)
+            used[static_cast<std::size_t>(mesh.tets(t, a))] = 1;
+    std::vector<Index> order;
+    for (Index v = 0; v < mesh.num_vertices(); ++v)
+        if (used[static_cast<std::size_t>(v)])
+            order.push_back(v);
+    const auto& x = mesh.rest_positions;
+    const auto position = [&](Index v) { return std::make_tuple(x(v, 0), x(v, 1), x(v, 2)); };
+    std::sort(order.begin(), order.end(), [&](Index a, Index b) {
+        return std::make_pair(position(a), a) < std::make_pair(position(b), b);
+    });
+    std::vector<std::array<Index, 2>> pairs;
+    for (std::size_t first = 0, i = 1; i < order.size(); ++i) {
+        if (position(order[i]) != position(order[first]))
+            first = i;
+        else
+            pairs.push_back({order[first], order[i]});
+    }
+    return pairs;
+}
+
 } // namespace coro

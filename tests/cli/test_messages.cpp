@@ -95,8 +95,8 @@ TEST(CorocontactMessages, ReportsTheThreadsActuallyUsed)
     ASSERT_EQ(outcome.exit_code, 0) << outcome.err;
     const int cores = tbb::info::default_concurrency();
     const std::string used = std::to_string(cores) + (cores == 1 ? " thread" : " threads");
-    EXPECT_THAT(outcome.err, HasSubstr("note: --threads 100000: this machine runs at most " + std::to_string(cores) +
-                                       " threads at once; using " + std::to_string(cores)));
+    EXPECT_THAT(outcome.err, HasSubstr("note: --threads 100000: this process may run on " + std::to_string(cores) +
+                                       (cores == 1 ? " core" : " cores") + " only; using " + used + "\n"));
     EXPECT_THAT(outcome.err, HasSubstr(", " + used + "\n")); // the header
     EXPECT_THAT(outcome.out, HasSubstr(", " + used + " (set-up"));
     EXPECT_EQ(json_number(slurp(dir / "o" / "block.summary.json"), "threads"), cores);

@@ -7,6 +7,7 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <limits>
 
 using namespace coro;
@@ -182,4 +183,29 @@ TEST(UnreferencedVertices, FindsNodesInNoTet)
     mesh.rest_positions.conservativeResize(6, 3);
     mesh.rest_positions.bottomRows(2).setOnes();
     EXPECT_EQ(unreferenced_vertices(mesh), (std::vector<Index>{4, 5}));
+}
+
+TEST(CoincidentVertices, PairsEveryNodeOfTetsWithTheFirstNodeAtItsPlace)
+{
+    // A box written twice over (the second copy's nodes after the first's), plus one more copy of
+    // node 0 that no tet uses: every node of the second copy coincides with one of the first.
+    const TetMesh box = make_box(Vec3(0, 0, 0), Vec3(2, 1, 1), {2, 1, 1});
+    const Index n = box.num_vertices();
+    TetMesh doubled;
+    doubled.rest_positions.resize(2 * n + 1, 3);
+    doubled.rest_positions << box.rest_positions, box.rest_positions, box.rest_positions.row(0);
+    doubled.tets.resize(2 * box.num_tets(), 4);
+    doubled.tets << box.tets, box.tets.array() + n;
+    std::vector<std::array<Index, 2>> brute;
+    for (Index w = 0; w < 2 * n; ++w)
+        for (Index v = 0; v < w; ++v)
+            if (doubled.rest_positions.row(v) == doubled.rest_positions.row(w)) {
+                brute.push_back({v, w});
+                break;
+            }
+    std::vector<std::array<Index, 2>> found = coincident_vertices(doubled);
+    std::sort(found.begin(), found.end());
+    EXPECT_EQ(found, brute);
+    EXPECT_EQ(found.size(), static_cast<std::size_t>(n));
+    EXPECT_TRUE(coincident_vertices(box).empty());
 }

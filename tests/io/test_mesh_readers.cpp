@@ -102,7 +102,7 @@ $Nodes
 0.5 0.5 -1
 $EndNodes
 $Elements
-6 9 1 20
+5 8 1 20
 0 1 15 1
 1 50 
 1 1 1 2
@@ -114,8 +114,6 @@ $Elements
 3 1 4 2
 10 50 100 7 5 
 12 100 7 20 5 
-3 1 11 1
-20 50 100 7 5 1 2 3 4 6 8 
 3 1 4 1
 13 9 50 7 100 
 $EndElements
@@ -149,12 +147,11 @@ $Nodes
 9 0.5 0.5 -1
 $EndNodes
 $Elements
-7
+6
 1 15 2 0 1 50
 2 1 2 0 1 50 100
 3 2 2 0 1 50 100 7
 4 4 2 1 1 50 100 7 5
-5 11 2 1 1 50 100 7 5 1 2 3 4 6 8
 6 4 3 1 1 0 100 7 20 5
 7 4 0 9 50 7 100
 $EndElements
@@ -174,6 +171,29 @@ TEST(ReadMsh, Msh22MapsSparseTagsAndKeepsOnlyTets)
         1, 2, 4, 3,         //
         5, 0, 2, 1;
     EXPECT_EQ(mesh.tets, expected);
+}
+
+TEST(ReadMsh, RefusesVolumeElementsOtherThanTheLinearTet)
+{
+    // Skipped like the points, lines and triangles of physical groups, a 10-node tet or a
+    // hexahedron would leave its volume out of the body.
+    std::string v22 = MSH22_MIXED;
+    const std::string tet4 = "4 4 2 1 1 50 100 7 5\n";
+    v22.replace(v22.find(tet4), tet4.size(), tet4 + "5 11 2 1 1 50 100 7 5 1 2 3 4 6 8\n");
+    v22.replace(v22.find("$Elements\n6\n"), 12, "$Elements\n7\n");
+    const int line = static_cast<int>(std::count(v22.begin(), v22.begin() + static_cast<long>(v22.find("5 11 ")), '\n')) + 1;
+    const fs::path tet10 = write_msh("tet10_v22.msh", v22);
+    EXPECT_THAT([&] { read_msh(tet10); },
+                input_error_at(tet10, line, "element type 11 (10-node tetrahedron) is a volume element corocontact "
+                                            "cannot use; expected 4-node tetrahedra (type 4) only"));
+    std::string v41 = MSH41_MIXED;
+    const std::string block = "3 1 4 1\n13 9 50 7 100 \n";
+    v41.replace(v41.find(block), block.size(), block + "3 1 5 1\n21 50 100 7 5 9 20 50 100 \n");
+    v41.replace(v41.find("5 8 1 20"), 8, "6 9 1 21");
+    const int block_line = static_cast<int>(std::count(v41.begin(), v41.begin() + static_cast<long>(v41.find("3 1 5 1")), '\n')) + 1;
+    const fs::path hex = write_msh("hex_v41.msh", v41);
+    EXPECT_THAT([&] { read_msh(hex); },
+                input_error_at(hex, block_line, "element type 5 (8-node hexahedron) is a volume element"));
 }
 
 TEST(ReadMsh, AcceptsCrlfLineEndingsAndBlankLines)
@@ -319,6 +339,21 @@ TEST(ReadMsh, RejectsDirectory)
     const fs::path path = write_msh("exists.msh", "").parent_path() / "dir.msh";
     fs::create_directories(path);
     EXPECT_THAT([&] { read_msh(path); }, input_error_about(path, "is a directory"));
+}
+
+TEST(ReadTetMesh, SaysADirectoryWithoutExtensionIsADirectory)
+{
+    const fs::path path = write_msh("exists.msh", "").parent_path() / "meshes";
+    fs::create_directories(path);
+    EXPECT_THAT([&] { read_tet_mesh(path); }, input_error_about(path, "is a directory, expected a mesh file"));
+}
+
+TEST(ReadTetMesh, RejectsADeviceInsteadOfReadingItWithoutEnd)
+{
+    const fs::path path = write_msh("exists.msh", "").parent_path() / "zero.msh";
+    fs::remove(path);
+    fs::create_symlink("/dev/zero", path);
+    EXPECT_THAT([&] { read_tet_mesh(path); }, input_error_about(path, "is a device or socket, expected a mesh file"));
 }
 
 TEST(ReadTetMesh, RejectsUnknownExtensionListingSupportedOnes)

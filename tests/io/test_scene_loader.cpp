@@ -5,6 +5,7 @@
 
 #include <corocontact/core/error.hpp>
 #include <corocontact/core/primitives.hpp>
+#include <corocontact/core/surface_mesh.hpp>
 #include <corocontact/io/case_reader.hpp>
 #include <corocontact/io/mesh_readers.hpp>
 
@@ -147,6 +148,21 @@ TEST(LoadScene, RefusesAStiffnessToMassRatioWhoseMassDoubleLoses)
               1u);
 }
 
+TEST(LoadScene, RefusesAStiffnessToMassRatioWhoseMassSingleValuesLose)
+{
+    // r = 13.46 / density: 1.3e4 with density 1e-3, beyond single values' 1e4 (a falling box's
+    // motion was wrong by 1% at 1e5 and 27% at 1e6), well within double's 1e10.
+    const std::string single = "[solver]\nmatrix_precision = \"single\"\n";
+    EXPECT_THAT([&] { load("light_single.toml", single + BLOCK + "density = 1e-3\n"); },
+                ThrowsMessage<InputError>(AllOf(
+                    HasSubstr("light_single.toml:3: body 'block': the stiffness-to-mass ratio of the implicit step, "
+                              "dt²(λ+2μ)/(ρh²), is about 1.3e+4"),
+                    HasSubstr("expected at most 1e+4 with solver.matrix_precision = \"single\""),
+                    HasSubstr("use matrix_precision = \"double\" (up to 1e+10), or simulation.dt at most"))));
+    EXPECT_EQ(load("light_double.toml", BLOCK + "density = 1e-3\n").scene.bodies.size(), 1u);
+    EXPECT_EQ(load("light_single_ok.toml", single + BLOCK + "density = 2e-3\n").scene.bodies.size(), 1u);
+}
+
 TEST(LoadScene, RefusesValuesWhoseProductsVanishInDouble)
 {
     EXPECT_THAT([] { load("density.toml", BLOCK + "density = 1e-300\n"); },
@@ -216,6 +232,33 @@ TEST(LoadScene, WarnsAboutAnEmbeddedSurfaceALittleOutsideItsTets)
     test::write_text(scratch() / "inside.obj",
                      "v 0.2 0.2 0.2\nv 0.8 0.2 0.2\nv 0.2 0.8 0.2\nv 0.3 0.3 0.9\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n");
     EXPECT_THAT(load("inside_surface.toml", BLOCK + "surface = \"inside.obj\"\n").warnings, IsEmpty());
+}
+
+TEST(LoadScene, TurnsAnInsideOutEmbeddedSurfaceOutward)
+{
+    // inside.obj of the test above with every face reversed: contact would take the tet's inside
+    // for its outside and never find another body's vertex in it.
+    test::write_text(scratch() / "inward.obj",
+                     "v 0.2 0.2 0.2\nv 0.8 0.2 0.2\nv 0.2 0.8 0.2\nv 0.3 0.3 0.9\nf 1 2 3\nf 1 4 2\nf 1 3 4\nf 2 4 3\n");
+    const LoadedScene loaded = load("inward_surface.toml", BLOCK + "surface = \"inward.obj\"\n");
+    EXPECT_THAT(loaded.warnings, Contains(AllOf(HasSubstr("body 'block': surface"), HasSubstr("inward.obj"),
+                                                HasSubstr("had inward normals; its faces were flipped"))));
+    const SurfaceMesh& surface = loaded.scene.bodies.at(0).embedded_surface();
+    EXPECT_GT(enclosed_volume(surface.vertices, surface.faces), 0.0);
+}
+
+TEST(LoadScene, WarnsAboutNodesThatLieWhereAnotherNodeLies)
+{
+    // Two tets sharing a face by position only: nodes 5, 6, 7 repeat nodes 1, 2, 3 (the first
+    // pair by position: 3 and 7 at (0, 0, 1)).
+    test::write_text(scratch() / "unmerged.msh", "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$Nodes\n8\n1 0 0 0\n2 1 0 0\n"
+                                                 "3 0 1 0\n4 0 0 1\n5 1 1 1\n6 1 0 0\n7 0 1 0\n8 0 0 1\n$EndNodes\n"
+                                                 "$Elements\n2\n1 4 2 0 1 1 2 3 4\n2 4 2 0 1 6 7 8 5\n$EndElements\n");
+    const LoadedScene loaded = load("unmerged.toml", "[[body]]\nname = \"b\"\nmesh = \"unmerged.msh\"\n");
+    EXPECT_THAT(loaded.warnings, Contains(AllOf(HasSubstr("body 'b': mesh"), HasSubstr("unmerged.msh"),
+                                                HasSubstr("3 nodes lie exactly where another node lies (e.g. nodes "
+                                                          "3 and 7 at (0, 0, 1)"))));
+    EXPECT_THAT(load("merged.toml", BLOCK).warnings, IsEmpty());
 }
 
 TEST(LoadScene, WarnsWhenALoadFallsOnFixedNodes)

@@ -530,6 +530,21 @@ TEST(ReadSurface, RejectsDirectory)
     EXPECT_THAT([&] { read_surface(path); }, input_error_about(path, "is a directory"));
 }
 
+TEST(ReadSurface, SaysADirectoryWithoutExtensionIsADirectory)
+{
+    const fs::path path = scratch() / "surfaces";
+    fs::create_directories(path);
+    EXPECT_THAT([&] { read_surface(path); }, input_error_about(path, "is a directory, expected a surface file"));
+}
+
+TEST(ReadSurface, RejectsADeviceInsteadOfReadingItWithoutEnd)
+{
+    const fs::path path = scratch() / "urandom.stl";
+    fs::remove(path);
+    fs::create_symlink("/dev/urandom", path);
+    EXPECT_THAT([&] { read_surface(path); }, input_error_about(path, "is a device or socket, expected a surface file"));
+}
+
 TEST(ReadSurface, RejectsUnknownExtensionListingSupportedOnes)
 {
     const fs::path path = write_file("mesh.ply", "ply\n");

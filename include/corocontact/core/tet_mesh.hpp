@@ -76,4 +76,9 @@ double mean_ratio_quality(const TetMesh& mesh, Index t);
 /// Nodes referenced by no tet (they carry no stiffness and no mass).
 std::vector<Index> unreferenced_vertices(const TetMesh& mesh);
 
+/// Nodes of tets that lie exactly where a node of a smaller index lies, each as {that first
+/// node, this one}, ordered by position. Such nodes are not joined: the tets on either side of
+/// them are separate pieces (unmerged duplicates of a mesher, or a mesh written twice).
+std::vector<std::array<Index, 2>> coincident_vertices(const TetMesh& mesh);
+
 } // namespace coro
