@@ -223,12 +223,23 @@ double mean_ratio_quality(const TetMesh& mesh, Index t)
     return volume < 0.0 ? -magnitude : magnitude;
 }
 
-std::vector<Index> unreferenced_vertices(const TetMesh& mesh)
+namespace {
+
+/// Per node, 1 when a tet references it.
+std::vector<char> referenced_flags(const TetMesh& mesh)
 {
     std::vector<char> used(static_cast<std::size_t>(mesh.num_vertices()), 0);
     for (Index t = 0; t < mesh.num_tets(); ++t)
         for (int a = 0; a < 4; ++a)
             used[static_cast<std::size_t>(mesh.tets(t, a))] = 1;
+    return used;
+}
+
+} // namespace
+
+std::vector<Index> unreferenced_vertices(const TetMesh& mesh)
+{
+    const std::vector<char> used = referenced_flags(mesh);
     std::vector<Index> unused;
     for (Index v = 0; v < mesh.num_vertices(); ++v)
         if (!used[static_cast<std::size_t>(v)])
@@ -238,10 +249,7 @@ std::vector<Index> unreferenced_vertices(const TetMesh& mesh)
 
 std::vector<std::array<Index, 2>> coincident_vertices(const TetMesh& mesh)
 {
-    std::vector<char> used(static_cast<std::size_t>(mesh.num_vertices()), 0);
-    for (Index t = 0; t < mesh.num_tets(); ++t)
-        for (int a = 0; a < 4; ++a)
-            used[static_cast<std::size_t>(mesh.tets(t, a))] = 1;
+    const std::vector<char> used = referenced_flags(mesh);
     std::vector<Index> order;
     for (Index v = 0; v < mesh.num_vertices(); ++v)
         if (used[static_cast<std::size_t>(v)])
