@@ -21,6 +21,7 @@
 #include <fstream>
 #include <iterator>
 #include <limits>
+#include <new>
 #include <map>
 #include <optional>
 #include <sstream>
@@ -994,14 +995,25 @@ CaseSpec read_case(const fs::path& file, std::vector<std::string>& notes)
 {
     std::error_code ec;
     const fs::file_status status = fs::status(file, ec);
+    CORO_CHECK(!ec || ec == std::errc::no_such_file_or_directory, InputError,
+               file.string() << ": cannot access the case file: " << ec.message());
     CORO_CHECK(fs::exists(status), InputError,
                file.string() << ": cannot read the case file: no such file");
     CORO_CHECK(!fs::is_directory(status), InputError,
                file.string() << ": cannot read the case file: it is a directory, expected a .toml file");
+    // A device (/dev/zero) or a pipe would be read without end or bound.
+    CORO_CHECK(fs::is_regular_file(status), InputError,
+               file.string() << ": cannot read the case file: it is not a regular file, expected a .toml file");
     std::ifstream in(file, std::ios::binary);
     CORO_CHECK(in.is_open(), InputError,
                file.string() << ": cannot open the case file: " << std::strerror(errno));
-    std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    std::string text;
+    try {
+        text.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+    } catch (const std::bad_alloc&) {
+        std::string().swap(text);
+        CORO_THROW(InputError, file.string() << ": the case file does not fit in memory");
+    }
     CORO_CHECK(!in.bad(), InputError, file.string() << ": cannot read the case file: read error");
     return parse_case(text, file, notes);
 }

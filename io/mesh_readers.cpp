@@ -252,7 +252,7 @@ void read_elements_v22(LineCursor& cursor, MshBuilder& builder)
         const std::uint64_t tag = tokens.next_count("element tag");
         const int type = tokens.next_int("element type");
         if (type != MSH_TET4) {
-            refuse_other_volume_element(type, cursor.where());
+            refuse_other_volume_element(type, -1, cursor.where());
             continue;
         }
         const std::uint64_t n_tags = tokens.next_count("the number of element tags");
@@ -295,13 +295,14 @@ void read_elements_v41(LineCursor& cursor, MshBuilder& builder)
                                               "numElementsInBlock')";
                                     }),
                      cursor);
-        block.next_int("entity dimension");
+        const int dim = block.next_int("entity dimension");
         block.next_int("entity tag");
         const int type = block.next_int("element type");
         const std::uint64_t in_block = block.next_count("the number of elements in the block");
         block.expect_end("'entityDim entityTag elementType numElementsInBlock'");
         const long block_line = cursor.line();
-        refuse_other_volume_element(type, cursor.where());
+        if (in_block > 0)
+            refuse_other_volume_element(type, dim, cursor.where());
         if (type == MSH_TET4)
             builder.reserve_elements(in_block);
         for (std::uint64_t i = 0; i < in_block; ++i) {
@@ -407,7 +408,8 @@ TetMesh read_msh(const std::filesystem::path& path)
 
 TetMesh read_tet_mesh(const std::filesystem::path& path)
 {
-    CORO_CHECK(!std::filesystem::is_directory(path), InputError,
+    std::error_code ec; // an inaccessible path is reported by read_file
+    CORO_CHECK(!std::filesystem::is_directory(path, ec), InputError,
                path.string() << ": is a directory, expected a mesh file");
     std::string extension = path.extension().string();
     std::transform(extension.begin(), extension.end(), extension.begin(),

@@ -256,7 +256,7 @@ void read_elements_v22(ByteReader& in, MshBuilder& builder)
             return std::to_string(in_group) + " elements of type " + std::to_string(type) +
                    " in the group at byte " + std::to_string(group_at);
         });
-        refuse_other_volume_element(type, in.where(group_at));
+        refuse_other_volume_element(type, -1, in.where(group_at));
         if (type == MSH_TET4)
             builder.reserve_elements(in_group);
         for (std::uint64_t e = 0; e < in_group; ++e) {
@@ -364,7 +364,7 @@ void read_elements_v41(ByteReader& in, MshBuilder& builder)
     std::uint64_t n_read = 0;
     for (std::uint64_t b = 0; b < n_blocks; ++b) {
         const std::size_t block_at = in.pos();
-        in.value<std::int32_t>("entity dimension");
+        const auto dim = in.value<std::int32_t>("entity dimension");
         in.value<std::int32_t>("entity tag");
         const auto type = in.value<std::int32_t>("element type");
         const auto in_block = in.value<std::uint64_t>("the number of elements in the block");
@@ -383,7 +383,8 @@ void read_elements_v41(ByteReader& in, MshBuilder& builder)
             return std::to_string(in_block) + " elements of type " + std::to_string(type) +
                    " in the block at byte " + std::to_string(block_at);
         });
-        refuse_other_volume_element(type, in.where(block_at));
+        if (in_block > 0)
+            refuse_other_volume_element(type, dim, in.where(block_at));
         if (type == MSH_TET4)
             builder.reserve_elements(in_block);
         for (std::uint64_t e = 0; e < in_block; ++e) {

@@ -50,13 +50,11 @@ void warn_if_coincident(const TetMesh& mesh, const std::string& what, std::vecto
     if (pairs.empty())
         return;
     const auto [first, other] = pairs.front();
-    const auto& x = mesh.rest_positions;
     std::ostringstream message;
     message << what << ": " << pairs.size() << (pairs.size() == 1 ? " node lies" : " nodes lie")
-            << " exactly where another node lies (e.g. nodes " << first << " and " << other << " at (" << x(first, 0)
-            << ", " << x(first, 1) << ", " << x(first, 2)
-            << "); nodes counted from 0 in file order); they are not joined, so the tets on either side are "
-               "separate pieces that can move apart: merge duplicate nodes in the mesher";
+            << " exactly where another node lies (e.g. nodes " << first << " and " << other
+            << ", counted from 0 in file order); they are not joined, so the tets on either side are separate "
+               "pieces that can move apart: merge duplicate nodes in the mesher";
     warnings.push_back(message.str());
 }
 

@@ -931,7 +931,8 @@ void append_vertices(TextOut& out, const SurfaceMesh& surface, std::string_view 
 
 SurfaceMesh read_surface(const std::filesystem::path& path)
 {
-    CORO_CHECK(!std::filesystem::is_directory(path), InputError,
+    std::error_code ec; // an inaccessible path is reported by read_file
+    CORO_CHECK(!std::filesystem::is_directory(path, ec), InputError,
                path.string() << ": is a directory, expected a surface file");
     std::string extension = path.extension().string();
     std::transform(extension.begin(), extension.end(), extension.begin(), lower);

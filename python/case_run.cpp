@@ -262,8 +262,7 @@ void CaseRun::set_contact_damping(double damping)
 void CaseRun::set_contact_friction(double friction)
 {
     check_contact_applies("contact.friction");
-    check_number(friction, false, "contact.friction");
-    CORO_CHECK(friction <= MAX_FRICTION, InputError,
+    CORO_CHECK(friction >= 0.0 && friction <= MAX_FRICTION, InputError, // false for NaN too
                "contact.friction: expected a number in [0, " << MAX_FRICTION << "], found " << friction);
     m_spec.contact.friction = friction;
     m_simulation->update_contact_response();

@@ -470,10 +470,12 @@ int detect_case(const DetectOptions& options)
         const std::vector<coro::ContactPoint> embree =
             coro::detect_contacts_embree(surfaces, scenes, coro::detection_settings(spec.contact));
         const std::vector<coro::Disagreement> disagreements = coro::cross_check(points, embree);
+        const auto in_surfaces = std::count_if(points.begin(), points.end(),
+                                               [](const coro::ContactPoint& c) { return c.other.is_surface(); });
         std::fprintf(report,
-                     "embree cross-check: %zu disagreements (axis-ray %zu inside, Embree %zu inside), %d depth "
-                     "disagreements\n",
-                     disagreements.size(), points.size(), embree.size(),
+                     "embree cross-check: %zu disagreements (axis-ray %zu inside, Embree %zu inside; plane contacts "
+                     "left out), %d depth disagreements\n",
+                     disagreements.size(), static_cast<std::size_t>(in_surfaces), embree.size(),
                      static_cast<int>(coro::depth_disagreements(points, embree)));
         if (options.verbose)
             for (const coro::Disagreement& d : disagreements)

@@ -51,17 +51,6 @@ inline const char* msh_other_volume_element(int type)
     }
 }
 
-/// Refuses an element of `type` when it is a volume element other than the 4-node tetrahedron.
-/// @param[in] where  the place in the file, for the message ("mesh.msh:12")
-inline void refuse_other_volume_element(int type, const std::string& where)
-{
-    if (const char* name = msh_other_volume_element(type))
-        CORO_THROW(InputError, where << ": element type " << type << " (" << name
-                                     << ") is a volume element corocontact cannot use; expected 4-node "
-                                        "tetrahedra (type 4) only: mesh the body with linear tets (Gmsh: "
-                                        "-order 1 and no recombination)");
-}
-
 /// Number of nodes of a Gmsh element type (the table of the MSH format documentation), or 0
 /// for a type this table does not know. Binary files need it to skip elements of other types.
 inline int msh_nodes_per_element(int type)
@@ -76,6 +65,27 @@ inline int msh_nodes_per_element(int type)
     if (type == 93)
         return 125; // 4th-order hexahedron
     return 0;
+}
+
+/// Refuses an element of `type` when it may be a volume element other than the 4-node
+/// tetrahedron: one of msh_other_volume_element's, any element of a 3-D entity (`dimension`
+/// 3, as MSH 4.1 says; −1 where the format does not say), or a type msh_nodes_per_element does
+/// not know (Gmsh has higher-order prisms, pyramids and hexahedra beyond its table).
+/// @param[in] where  the place in the file, for the message ("mesh.msh:12")
+inline void refuse_other_volume_element(int type, int dimension, const std::string& where)
+{
+    if (type == 4)
+        return;
+    const char* name = msh_other_volume_element(type);
+    if (name == nullptr && dimension == 3)
+        name = "an element of a volume";
+    if (name != nullptr)
+        CORO_THROW(InputError, where << ": element type " << type << " (" << name
+                                     << ") is a volume element corocontact cannot use; expected 4-node "
+                                        "tetrahedra (type 4) only: mesh the body with linear tets (Gmsh: "
+                                        "-order 1 and no recombination)");
+    CORO_CHECK(msh_nodes_per_element(type) > 0, InputError,
+               where << ": unknown element type " << type << " (expected a Gmsh element type such as 4, the tet)");
 }
 
 /// Nodes and tets as they are read, with node tags mapped to 0-based indices in file order.

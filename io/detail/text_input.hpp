@@ -55,9 +55,10 @@ inline std::string read_file(const std::filesystem::path& path, const char* kind
     CORO_CHECK(std::filesystem::exists(status), InputError, path.string() << ": " << kind << " does not exist");
     CORO_CHECK(!std::filesystem::is_directory(status), InputError,
                path.string() << ": is a directory, expected a " << kind);
-    // A pipe is read like a file; a device (/dev/zero, /dev/urandom) would be read without end.
-    CORO_CHECK(std::filesystem::is_regular_file(status) || std::filesystem::is_fifo(status), InputError,
-               path.string() << ": is a device or socket, expected a " << kind);
+    // A device (/dev/zero, /dev/urandom) would be read without end, and a pipe cannot be read
+    // twice, as VTK's readers open the file again.
+    CORO_CHECK(std::filesystem::is_regular_file(status), InputError,
+               path.string() << ": is not a regular file (a device, pipe or socket), expected a " << kind);
     const std::unique_ptr<std::FILE, int (*)(std::FILE*)> file(std::fopen(path.c_str(), "rb"), &std::fclose);
     CORO_CHECK(file != nullptr, InputError, path.string() << ": cannot open the " << kind << ": " << std::strerror(errno));
     std::string text;

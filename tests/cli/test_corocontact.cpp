@@ -492,6 +492,17 @@ TEST(CorocontactInfo, DescribesAMesh)
                                       "using 172 parts"));
     EXPECT_THAT(capped.out, HasSubstr("METIS parts 172: edge-cut"));
     EXPECT_EQ(run("info " + (dir / "absent.msh").string(), dir).exit_code, 2);
+    EXPECT_THAT(outcome.out, HasSubstr("nodes where another node lies 0"));
+    EXPECT_THAT(outcome.err, Not(HasSubstr("warning")));
+    // Two tets that share a face by position only: nodes 5, 6, 7 repeat nodes 1, 2, 3.
+    const fs::path unmerged = coro::test::write_text(
+        dir / "unmerged.msh", "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$Nodes\n8\n1 0 0 0\n2 1 0 0\n3 0 1 0\n4 0 0 1\n"
+                              "5 1 1 1\n6 1 0 0\n7 0 1 0\n8 0 0 1\n$EndNodes\n$Elements\n2\n1 4 2 0 1 1 2 3 4\n"
+                              "2 4 2 0 1 6 7 8 5\n$EndElements\n");
+    const Outcome split = run("info " + unmerged.string(), dir);
+    ASSERT_EQ(split.exit_code, 0) << split.err;
+    EXPECT_THAT(split.out, HasSubstr("nodes where another node lies 3"));
+    EXPECT_THAT(split.err, HasSubstr("warning: 3 nodes lie exactly where another node lies (e.g. nodes 3 and 7"));
 }
 
 TEST(Corocontact, HelpAndVersion)

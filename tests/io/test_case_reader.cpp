@@ -369,6 +369,17 @@ TEST(ReadCase, MissingFileIsAnError)
     fs::remove_all(dir);
 }
 
+TEST(ReadCase, DeviceIsAnErrorNotReadWithoutEnd)
+{
+    const fs::path dir = coro::test::scratch_dir("case_device");
+    const fs::path file = dir / "zero.toml";
+    fs::create_symlink("/dev/zero", file);
+    EXPECT_THAT([&] { coro::read_case(file); },
+                ThrowsMessage<coro::InputError>(AllOf(StartsWith(file.string() + ":"),
+                                                      HasSubstr("it is not a regular file, expected a .toml file"))));
+    fs::remove_all(dir);
+}
+
 TEST(ReadCase, DirectoryIsAnError)
 {
     const fs::path dir = coro::test::scratch_dir("case_directory");

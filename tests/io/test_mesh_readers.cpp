@@ -194,6 +194,14 @@ TEST(ReadMsh, RefusesVolumeElementsOtherThanTheLinearTet)
     const fs::path hex = write_msh("hex_v41.msh", v41);
     EXPECT_THAT([&] { read_msh(hex); },
                 input_error_at(hex, block_line, "element type 5 (8-node hexahedron) is a volume element"));
+    // Types beyond the format's table: a 40-node prism in a volume's block, an unknown type.
+    v41.replace(v41.find("3 1 5 1"), 7, "3 1 90 1");
+    const fs::path prism = write_msh("prism40_v41.msh", v41);
+    EXPECT_THAT([&] { read_msh(prism); },
+                input_error_at(prism, block_line, "element type 90 (an element of a volume) is a volume element"));
+    v22.replace(v22.find("5 11 "), 5, "5 999 ");
+    const fs::path unknown = write_msh("unknown_v22.msh", v22);
+    EXPECT_THAT([&] { read_msh(unknown); }, input_error_at(unknown, line, "unknown element type 999"));
 }
 
 TEST(ReadMsh, AcceptsCrlfLineEndingsAndBlankLines)
@@ -353,7 +361,16 @@ TEST(ReadTetMesh, RejectsADeviceInsteadOfReadingItWithoutEnd)
     const fs::path path = write_msh("exists.msh", "").parent_path() / "zero.msh";
     fs::remove(path);
     fs::create_symlink("/dev/zero", path);
-    EXPECT_THAT([&] { read_tet_mesh(path); }, input_error_about(path, "is a device or socket, expected a mesh file"));
+    EXPECT_THAT([&] { read_tet_mesh(path); },
+                input_error_about(path, "is not a regular file (a device, pipe or socket), expected a mesh file"));
+}
+
+TEST(ReadTetMesh, NamesAPathItCannotAccess)
+{
+    const fs::path path = write_msh("exists.msh", "").parent_path() / "loop.msh";
+    fs::remove(path);
+    fs::create_symlink("loop.msh", path); // a link to itself
+    EXPECT_THAT([&] { read_tet_mesh(path); }, input_error_about(path, "cannot access the mesh file: "));
 }
 
 TEST(ReadTetMesh, RejectsUnknownExtensionListingSupportedOnes)

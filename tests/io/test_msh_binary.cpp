@@ -237,6 +237,17 @@ TEST(ReadMshBinary, RejectsUnknownElementTypeAndOverlongGroup)
                 error_with(overlong_path, "declares 9 elements, expected 1 to 4"));
 }
 
+TEST(ReadMshBinary, RejectsVolumeElementsOtherThanTheLinearTet)
+{
+    std::string bytes = msh22_two_tets(false);
+    const std::size_t group = bytes.find("$Elements\n4\n") + 12;
+    bytes[group] = 11; // the triangles' group becomes one of 10-node tets
+    const fs::path path = write_file("tet10_group.msh", bytes);
+    EXPECT_THAT([&] { read_msh(path); },
+                error_with(path, "byte " + std::to_string(group) +
+                                     ": element type 11 (10-node tetrahedron) is a volume element"));
+}
+
 TEST(ReadMshBinary, RejectsMissingEndMarkerAfterTheData)
 {
     std::string bytes = msh22_two_tets(false);

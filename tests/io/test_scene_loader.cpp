@@ -250,14 +250,14 @@ TEST(LoadScene, TurnsAnInsideOutEmbeddedSurfaceOutward)
 TEST(LoadScene, WarnsAboutNodesThatLieWhereAnotherNodeLies)
 {
     // Two tets sharing a face by position only: nodes 5, 6, 7 repeat nodes 1, 2, 3 (the first
-    // pair by position: 3 and 7 at (0, 0, 1)).
+    // pair by position: 3 and 7, at (0, 0, 1)).
     test::write_text(scratch() / "unmerged.msh", "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$Nodes\n8\n1 0 0 0\n2 1 0 0\n"
                                                  "3 0 1 0\n4 0 0 1\n5 1 1 1\n6 1 0 0\n7 0 1 0\n8 0 0 1\n$EndNodes\n"
                                                  "$Elements\n2\n1 4 2 0 1 1 2 3 4\n2 4 2 0 1 6 7 8 5\n$EndElements\n");
     const LoadedScene loaded = load("unmerged.toml", "[[body]]\nname = \"b\"\nmesh = \"unmerged.msh\"\n");
     EXPECT_THAT(loaded.warnings, Contains(AllOf(HasSubstr("body 'b': mesh"), HasSubstr("unmerged.msh"),
                                                 HasSubstr("3 nodes lie exactly where another node lies (e.g. nodes "
-                                                          "3 and 7 at (0, 0, 1)"))));
+                                                          "3 and 7, counted from 0 in file order)"))));
     EXPECT_THAT(load("merged.toml", BLOCK).warnings, IsEmpty());
 }
 

@@ -542,7 +542,7 @@ TEST(ReadSurface, RejectsADeviceInsteadOfReadingItWithoutEnd)
     const fs::path path = scratch() / "urandom.stl";
     fs::remove(path);
     fs::create_symlink("/dev/urandom", path);
-    EXPECT_THAT([&] { read_surface(path); }, input_error_about(path, "is a device or socket, expected a surface file"));
+    EXPECT_THAT([&] { read_surface(path); }, input_error_about(path, "is not a regular file (a device, pipe or socket), expected a surface file"));
 }
 
 TEST(ReadSurface, RejectsUnknownExtensionListingSupportedOnes)

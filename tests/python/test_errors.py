@@ -78,7 +78,7 @@ def test_values_set_from_python_are_checked_like_the_case_files(spheres):
         body.fixed = [True, False, True]
     with pytest.raises(corocontact.InputError, match="expected an array of numbers"):
         body.loads = "heavy"
-    with pytest.raises(corocontact.InputError, match=r"contact.friction: expected a number >= 0, found -0.1"):
+    with pytest.raises(corocontact.InputError, match=r"contact.friction: expected a number in \[0, 10\], found -0.1"):
         spheres.contact_friction = -0.1
     with pytest.raises(corocontact.InputError, match=r"contact.friction: expected a number in \[0, 10\], found 1e\+12"):
         spheres.contact_friction = 1e12
