@@ -844,7 +844,9 @@ BodySpec read_body(const TableReader& t, Index k)
     x.translate = t.vec3("translate", x.translate);
     check_coordinates(t, "translate", x.translate);
     x.rotate_axis = t.vec3("rotate_axis", x.rotate_axis);
-    x.rotate_degrees = t.number("rotate_degrees", x.rotate_degrees);
+    // Ten turns either way: beyond, the angle is likely a unit mistake, and far beyond (1e17)
+    // its remainder by 360 is rounding noise.
+    x.rotate_degrees = t.number("rotate_degrees", x.rotate_degrees, Range{-3600.0, 3600.0, false, false});
     x.scale = t.number("scale", x.scale, POSITIVE);
     if (x.rotate_degrees != 0.0 && !(x.rotate_axis.stableNorm() > 0.0))
         CORO_CASE_ERROR(t.ctx(), t.find("rotate_axis")->source(), t.full("rotate_axis"),

@@ -621,6 +621,7 @@ INSTANTIATE_TEST_SUITE_P(
         BadValue{"RayleighMassNegative", body("rayleigh_mass = -0.1"), "case.toml:3:17: body[0].rayleigh_mass:", ">= 0"},
         BadValue{"RayleighStiffnessNegative", body("rayleigh_stiffness = -1e-3"), "case.toml:3:22: body[0].rayleigh_stiffness:", ">= 0"},
         BadValue{"ScaleZero", body("scale = 0"), "case.toml:3:9: body[0].scale:", "> 0"},
+        BadValue{"RotateDegreesHuge", body("rotate_degrees = 1e300"), "case.toml:3:18: body[0].rotate_degrees:", "expected a number in [-3600, 3600], found the floating-point number 1e+300"},
         BadValue{"RotateAxisZero", body("rotate_axis = [0, 0, 0]\nrotate_degrees = 30"), "case.toml:3:15: body[0].rotate_axis:", "nonzero axis"},
         BadValue{"VelocityNan", body("velocity = [nan, 0, 0]"), "case.toml:3:13: body[0].velocity[0]:", "finite"},
         BadValue{"CellsZero", body("cells = [1, 0, 1]"), "case.toml:3:13: body[0].cells[1]:", "found the integer 0"},
