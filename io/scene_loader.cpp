@@ -12,7 +12,9 @@
 #include <corocontact/partition/partition.hpp>
 
 #include <algorithm>
+#include <map>
 #include <sstream>
+#include <tuple>
 
 namespace coro {
 namespace {
@@ -56,6 +58,27 @@ void warn_if_coincident(const TetMesh& mesh, const std::string& what, std::vecto
             << ", counted from 0 in file order); they are not joined, so the tets on either side are separate "
                "pieces that can move apart: merge duplicate nodes in the mesher";
     warnings.push_back(message.str());
+}
+
+/// A warning for a body whose nodes all lie where an earlier body's lie (a second body made from
+/// the first one's mesh without a translate): their surfaces coincide, no vertex of one is inside
+/// the other, and contact never separates them.
+void warn_about_coincident_bodies(const CaseSpec& spec, const Scene& scene, std::vector<std::string>& warnings)
+{
+    using Key = std::tuple<Index, double, double, double, double, double, double>; // nodes, box
+    std::map<Key, std::size_t> first_with;
+    for (std::size_t b = 0; b < scene.bodies.size(); ++b) {
+        const Positions& x = scene.bodies[b].mesh().rest_positions;
+        const Vec3 lo = x.colwise().minCoeff().transpose(), hi = x.colwise().maxCoeff().transpose();
+        const auto [first, fresh] =
+            first_with.emplace(Key{static_cast<Index>(x.rows()), lo.x(), lo.y(), lo.z(), hi.x(), hi.y(), hi.z()}, b);
+        if (fresh || x != scene.bodies[first->second].mesh().rest_positions)
+            continue;
+        warnings.push_back(spec.bodies[b].location + ": body '" + spec.bodies[b].name + "' lies exactly where body '" +
+                           spec.bodies[first->second].name +
+                           "' lies (the same nodes at the same places); their surfaces coincide, so no vertex of "
+                           "one is inside the other and contact never separates them: give one a translate");
+    }
 }
 
 /// A box load is split over the nodes in its box; the share of a fixed node has no effect, so
@@ -258,6 +281,8 @@ LoadedScene load_scene(const CaseSpec& spec, const LoadProgress& progress)
         warn_about_loads_on_fixed_nodes(body, body_spec, loaded.warnings);
         loaded.scene.bodies.push_back(std::move(body));
     }
+    if (spec.contact.enabled)
+        warn_about_coincident_bodies(spec, loaded.scene, loaded.warnings);
     for (const ObstacleSpec& obstacle : spec.obstacles) {
         if (obstacle.type == ObstacleType::PLANE) {
             const Vec3 normal = obstacle.normal.normalized();

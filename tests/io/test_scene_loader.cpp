@@ -261,6 +261,17 @@ TEST(LoadScene, WarnsAboutNodesThatLieWhereAnotherNodeLies)
     EXPECT_THAT(load("merged.toml", BLOCK).warnings, IsEmpty());
 }
 
+TEST(LoadScene, WarnsAboutABodyThatLiesExactlyWhereAnotherLies)
+{
+    const std::string ball = "[[body]]\nname = \"a\"\nshape = \"sphere\"\nresolution = 3\n"
+                             "[[body]]\nname = \"b\"\nshape = \"sphere\"\nresolution = 3\n";
+    const std::string contact = "[contact]\nenabled = true\n";
+    EXPECT_THAT(load("coincident.toml", contact + ball).warnings,
+                Contains(AllOf(HasSubstr("coincident.toml:7: body 'b' lies exactly where body 'a' lies"),
+                               HasSubstr("give one a translate"))));
+    EXPECT_THAT(load("apart.toml", contact + ball + "translate = [3.0, 0.0, 0.0]\n").warnings, IsEmpty());
+}
+
 TEST(LoadScene, WarnsWhenALoadFallsOnFixedNodes)
 {
     // The load box x >= 1 holds the 4 nodes of the box's right face; the fixed box x >= 1, y <= 0
