@@ -18,17 +18,56 @@
 
 namespace coro::detail {
 
-/// A token or line as it appears in a message: quoted, cut after a few dozen characters,
-/// control bytes shown as '?', so binary garbage does not end up in a terminal.
+/// Bytes of the well-formed UTF-8 sequence of two to four bytes at the start of `text`, or 0
+/// (an ASCII byte, a stray continuation byte, an overlong or surrogate form, a cut sequence).
+inline std::size_t utf8_sequence_length(std::string_view text)
+{
+    const auto byte = [&](std::size_t i) { return static_cast<unsigned char>(text[i]); };
+    const unsigned char lead = byte(0);
+    std::size_t length = 0;
+    unsigned char low = 0x80, high = 0xbf; // the range of the second byte
+    if (lead >= 0xc2 && lead <= 0xdf) {
+        length = 2;
+    } else if (lead >= 0xe0 && lead <= 0xef) {
+        length = 3;
+        low = lead == 0xe0 ? 0xa0 : 0x80;
+        high = lead == 0xed ? 0x9f : 0xbf;
+    } else if (lead >= 0xf0 && lead <= 0xf4) {
+        length = 4;
+        low = lead == 0xf0 ? 0x90 : 0x80;
+        high = lead == 0xf4 ? 0x8f : 0xbf;
+    }
+    if (length == 0 || text.size() < length || byte(1) < low || byte(1) > high)
+        return 0;
+    for (std::size_t i = 2; i < length; ++i)
+        if (byte(i) < 0x80 || byte(i) > 0xbf)
+            return 0;
+    return length;
+}
+
+/// A token or line as it appears in a message: quoted, cut after a few dozen bytes, control
+/// bytes and bytes that are not well-formed UTF-8 shown as '?', so binary garbage does not end
+/// up in a terminal (UTF-8 text, a name in another script, is shown as it is).
 inline std::string in_quotes(std::string_view text)
 {
     constexpr std::size_t MAX_SHOWN = 40;
     std::string shown = "'";
-    for (std::size_t i = 0; i < std::min(text.size(), MAX_SHOWN); ++i) {
+    std::size_t i = 0;
+    for (; i < std::min(text.size(), MAX_SHOWN); ++i) {
         const auto c = static_cast<unsigned char>(text[i]);
+        if (c >= 0x80) {
+            const std::size_t length = utf8_sequence_length(text.substr(i));
+            if (length == 0) {
+                shown += '?';
+            } else {
+                shown.append(text.substr(i, length));
+                i += length - 1;
+            }
+            continue;
+        }
         shown += (c < 0x20 || c == 0x7f) ? '?' : text[i];
     }
-    if (text.size() > MAX_SHOWN)
+    if (i < text.size())
         shown += "...";
     return shown + "'";
 }

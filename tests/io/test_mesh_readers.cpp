@@ -390,6 +390,13 @@ TEST(ReadMsh, RejectsEmptyFile)
     EXPECT_THAT([&] { read_msh(path); }, input_error_at(path, 1, "expected $MeshFormat"));
 }
 
+TEST(ReadMsh, ShowsBytesThatAreNotUtf8AsQuestionMarks)
+{
+    // Two stray bytes, "été" in UTF-8, and a cut three-byte sequence: the terminal gets text.
+    const fs::path path = write_msh("garbage.msh", "\xff\xfe\xc3\xa9t\xc3\xa9 \xe2\x82\n");
+    EXPECT_THAT([&] { read_msh(path); }, input_error_at(path, 1, "found '?\x3f\xc3\xa9t\xc3\xa9 ?\x3f'"));
+}
+
 TEST(ReadMsh, RejectsMissingMeshFormat)
 {
     const fs::path path = write_msh("no_format.msh", "\n\n$Nodes\n1\n1 0 0 0\n$EndNodes\n");
