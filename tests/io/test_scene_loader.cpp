@@ -220,17 +220,23 @@ TEST(LoadScene, RefusesAnEmbeddedSurfaceFarOutsideItsTets)
                                                 HasSubstr("expected the surface on or inside the body"))));
 }
 
+/// A tet as an OBJ surface: three corners at z = 0.2 in the unit box and a top at (0.3, 0.3,
+/// top_z); faces with outward normals, or all reversed.
+std::string tet_obj(const std::string& top_z, bool inward = false)
+{
+    return "v 0.2 0.2 0.2\nv 0.8 0.2 0.2\nv 0.2 0.8 0.2\nv 0.3 0.3 " + top_z + "\n" +
+           (inward ? "f 1 2 3\nf 1 4 2\nf 1 3 4\nf 2 4 3\n" : "f 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n");
+}
+
 TEST(LoadScene, WarnsAboutAnEmbeddedSurfaceALittleOutsideItsTets)
 {
     // The top vertex is 0.5 above the unit box, 29% of the longest edge (the cell diagonal, √3)
     // of the tet it is bound to: more than a fine surface over coarse tets shows (≤ 15%).
-    test::write_text(scratch() / "near.obj",
-                     "v 0.2 0.2 0.2\nv 0.8 0.2 0.2\nv 0.2 0.8 0.2\nv 0.3 0.3 1.5\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n");
+    test::write_text(scratch() / "near.obj", tet_obj("1.5"));
     const LoadedScene loaded = load("near_surface.toml", BLOCK + "surface = \"near.obj\"\n");
     EXPECT_THAT(loaded.warnings, Contains(AllOf(HasSubstr("near.obj: vertex 3"), HasSubstr("lies 0.5 outside"),
                                                 HasSubstr("(1 of 4 vertices lie outside)"))));
-    test::write_text(scratch() / "inside.obj",
-                     "v 0.2 0.2 0.2\nv 0.8 0.2 0.2\nv 0.2 0.8 0.2\nv 0.3 0.3 0.9\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n");
+    test::write_text(scratch() / "inside.obj", tet_obj("0.9"));
     EXPECT_THAT(load("inside_surface.toml", BLOCK + "surface = \"inside.obj\"\n").warnings, IsEmpty());
 }
 
@@ -238,8 +244,7 @@ TEST(LoadScene, TurnsAnInsideOutEmbeddedSurfaceOutward)
 {
     // inside.obj of the test above with every face reversed: contact would take the tet's inside
     // for its outside and never find another body's vertex in it.
-    test::write_text(scratch() / "inward.obj",
-                     "v 0.2 0.2 0.2\nv 0.8 0.2 0.2\nv 0.2 0.8 0.2\nv 0.3 0.3 0.9\nf 1 2 3\nf 1 4 2\nf 1 3 4\nf 2 4 3\n");
+    test::write_text(scratch() / "inward.obj", tet_obj("0.9", true));
     const LoadedScene loaded = load("inward_surface.toml", BLOCK + "surface = \"inward.obj\"\n");
     EXPECT_THAT(loaded.warnings, Contains(AllOf(HasSubstr("body 'block': surface"), HasSubstr("inward.obj"),
                                                 HasSubstr("had inward normals; its faces were flipped"))));
