@@ -1,4 +1,4 @@
-#include "detail/magnitudes.hpp"
+#include <corocontact/io/magnitudes.hpp>
 
 #include <corocontact/core/error.hpp>
 
@@ -10,7 +10,7 @@
 #include <utility>
 #include <vector>
 
-namespace coro::detail {
+namespace coro {
 namespace {
 
 constexpr double LOG_LOW = -140.0;
@@ -250,7 +250,29 @@ void check_magnitudes(const CaseSpec& spec, const BodySpec& body, const TetMesh&
                                       "keep fewer than six significant digits of an edge, and strains would be "
                                       "rounding noise); move the body nearer the origin (translate) or use another "
                                       "length unit");
+    // Contact's nearest-point test and normals multiply four lengths (two squared ones).
+    check("a squared coordinate in contact detection", {{coordinate.name, coordinate.value, 2.0}});
+    check("a squared edge in contact detection", {{short_edge.name, short_edge.value, 2.0}});
     check_stiffness_to_mass_ratio(sim, spec.solver, body, g.shortest_edge);
 }
 
-} // namespace coro::detail
+void check_contact_lengths(CRef<Positions> vertices, const Tris& faces, const std::string& source)
+{
+    const double largest = std::pow(10.0, LOG_HIGH / 2.0), smallest = std::pow(10.0, LOG_LOW / 2.0);
+    for (Index v = 0; v < vertices.rows(); ++v)
+        for (int d = 0; d < 3; ++d)
+            CORO_CHECK(std::abs(vertices(v, d)) <= largest, InputError,
+                       source << ": vertex " << v << " has the coordinate " << vertices(v, d)
+                              << ", expected a magnitude of at most " << largest
+                              << " (contact detection multiplies four lengths, which would overflow double)");
+    for (Index f = 0; f < faces.rows(); ++f)
+        for (int c = 0; c < 3; ++c) {
+            const double edge = (vertices.row(faces(f, c)) - vertices.row(faces(f, (c + 1) % 3))).stableNorm();
+            CORO_CHECK(edge == 0.0 || edge >= smallest, InputError,
+                       source << ": face " << f << " has an edge of length " << edge << ", expected at least "
+                              << smallest << " (contact detection multiplies four lengths, which would vanish "
+                              << "in double)");
+        }
+}
+
+} // namespace coro

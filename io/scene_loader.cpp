@@ -1,11 +1,11 @@
 #include <corocontact/io/scene_loader.hpp>
 
 #include "detail/embedding_check.hpp"
-#include "detail/magnitudes.hpp"
 #include "detail/memory_budget.hpp"
 
 #include <corocontact/core/error.hpp>
 #include <corocontact/core/primitives.hpp>
+#include <corocontact/io/magnitudes.hpp>
 #include <corocontact/io/mesh_readers.hpp>
 #include <corocontact/io/surface_readers.hpp>
 #include <corocontact/core/surface_mesh.hpp>
@@ -245,7 +245,7 @@ LoadedScene load_scene(const CaseSpec& spec, const LoadProgress& progress)
                                          body_spec.mesh.string() + " has " + std::to_string(mesh.num_tets()) +
                                          " tets");
         }
-        detail::check_magnitudes(spec, body_spec, mesh);
+        check_magnitudes(spec, body_spec, mesh);
         report(which + ": METIS parts and element set-up, " + std::to_string(mesh.num_tets()) +
                (mesh.num_tets() == 1 ? " tet" : " tets"));
         Body body(mesh, body_spec, default_num_parts(mesh.num_tets(), spec.solver.parts_per_thread),

@@ -4,6 +4,7 @@
 #include <corocontact/core/surface_mesh.hpp>
 #include <corocontact/core/tet_mesh.hpp>
 #include <corocontact/io/case_reader.hpp>
+#include <corocontact/io/magnitudes.hpp>
 #include <corocontact/io/scene_loader.hpp>
 #include <corocontact/sim/scene_contact.hpp>
 
@@ -117,6 +118,7 @@ ContactRows detect_meshes(std::vector<MeshInput> meshes, const std::string& mode
         } else {
             check_triangles(mesh, source);
         }
+        check_contact_lengths(mesh.vertices, mesh.faces, source);
         const SurfaceCheck check = check_surface(mesh.faces);
         if (!check.closed_and_oriented()) {
             std::ostringstream message;

@@ -163,6 +163,19 @@ TEST(LoadScene, RefusesAStiffnessToMassRatioWhoseMassSingleValuesLose)
     EXPECT_EQ(load("light_single_ok.toml", single + BLOCK + "density = 2e-3\n").scene.bodies.size(), 1u);
 }
 
+TEST(LoadScene, RefusesLengthsWhoseFourthPowersContactCannotForm)
+{
+    // Scaled so that every product of the solver fits, only contact's squared lengths do not.
+    const std::string giant = "[[body]]\nname = \"giant\"\nshape = \"box\"\nmin = [0.0, 0.0, 0.0]\n"
+                              "max = [1e71, 1e71, 1e71]\ndensity = 1e-80\nyoung = 1e-60\n";
+    EXPECT_THAT([&] { load("giant.toml", giant); },
+                ThrowsMessage<InputError>(HasSubstr("body 'giant': a squared coordinate in contact detection is about 1e+142")));
+    const std::string dwarf = "[[body]]\nname = \"dwarf\"\nshape = \"box\"\nmin = [0.0, 0.0, 0.0]\n"
+                              "max = [1e-71, 1e-71, 1e-71]\ndensity = 1e80\nyoung = 1e60\n";
+    EXPECT_THAT([&] { load("dwarf.toml", dwarf); },
+                ThrowsMessage<InputError>(HasSubstr("body 'dwarf': a squared coordinate in contact detection is about")));
+}
+
 TEST(LoadScene, RefusesValuesWhoseProductsVanishInDouble)
 {
     EXPECT_THAT([] { load("density.toml", BLOCK + "density = 1e-300\n"); },

@@ -1,11 +1,13 @@
 #pragma once
-// Private to io/: the load-time check that a body's values, multiplied as the solver multiplies
-// them, stay inside the range where double arithmetic neither overflows nor loses them.
+/// @file magnitudes.hpp
+/// @brief The check that a body's values, multiplied as the solver multiplies them, stay inside
+/// the range where double arithmetic neither overflows nor loses them: at load time
+/// (io/scene_loader) and whenever a script changes a value between steps (python/).
 
 #include <corocontact/core/tet_mesh.hpp>
 #include <corocontact/sim/case_spec.hpp>
 
-namespace coro::detail {
+namespace coro {
 
 /// Every scale the solver forms from the case's values and the body's mesh must lie in
 /// [1e-140, 1e140]: matrix entries (element stiffness (λ + 2μ)·h, node mass ρV/4, their dt² and
@@ -20,4 +22,11 @@ namespace coro::detail {
 ///         from
 void check_magnitudes(const CaseSpec& spec, const BodySpec& body, const TetMesh& mesh);
 
-} // namespace coro::detail
+/// The part of check_magnitudes that contact detection alone needs, for surfaces given without
+/// a case: coordinates of magnitude at most 1e70 and edges of non-zero length at least 1e-70 (its
+/// nearest-point test and normals multiply four lengths).
+/// @param[in] vertices  #V×3 [m]; faces: #F×3 vertex indices, in range
+/// @throws InputError naming `source`, the vertex or face and the value
+void check_contact_lengths(CRef<Positions> vertices, const Tris& faces, const std::string& source);
+
+} // namespace coro
