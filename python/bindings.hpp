@@ -15,6 +15,8 @@ namespace py = pybind11;
 /// Warning categories (UserWarning): what `corocontact` prints as "warning: ..." about its input
 /// (InputWarning) and about its output folder (OutputWarning).
 enum class WarningKind { INPUT, OUTPUT };
+/// `message` as a Python str; bytes that are not UTF-8 (in a path) become U+FFFD.
+py::str text(const std::string& message);
 /// Gives each of `warnings` to Python's warnings module.
 /// @throws py::error_already_set when a warnings filter turns them into errors
 void warn(const std::vector<std::string>& warnings, WarningKind kind = WarningKind::INPUT);

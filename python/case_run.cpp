@@ -4,12 +4,16 @@
 #include <corocontact/core/error.hpp>
 #include <corocontact/core/tet_mesh.hpp>
 #include <corocontact/io/case_reader.hpp>
+#include <corocontact/io/magnitudes.hpp>
 #include <corocontact/io/run_files.hpp>
 #include <corocontact/io/scene_output.hpp>
 #include <corocontact/sim/run_notes.hpp>
 
 #include <sys/resource.h>
+#include <tbb/task_arena.h>
 
+#include <algorithm>
+#include <charconv>
 #include <chrono>
 #include <cmath>
 #include <sstream>
@@ -25,11 +29,17 @@ double peak_rss_mb()
     return static_cast<double>(usage.ru_maxrss) / 1024.0; // ru_maxrss is in KiB on Linux
 }
 
+/// The shortest text that reads back as `value` (10.0000001, not 10).
+std::string number_text(double value)
+{
+    char buffer[32];
+    const auto end = std::to_chars(buffer, buffer + sizeof buffer, value).ptr;
+    return std::string(buffer, end);
+}
+
 std::string format_row(const Eigen::RowVector3d& row)
 {
-    std::ostringstream text;
-    text << "(" << row[0] << ", " << row[1] << ", " << row[2] << ")";
-    return text.str();
+    return "(" + number_text(row[0]) + ", " + number_text(row[1]) + ", " + number_text(row[2]) + ")";
 }
 
 /// The first row (input node) of `rows` holding a non-finite number, or −1.
@@ -45,9 +55,10 @@ Index first_non_finite_row(CRef<Positions> rows)
 void check_number(double value, bool positive, const char* key)
 {
     const char* range = positive ? " > 0" : " >= 0";
-    CORO_CHECK(std::isfinite(value), InputError, key << ": expected a finite number" << range << ", found " << value);
+    CORO_CHECK(std::isfinite(value), InputError,
+               key << ": expected a finite number" << range << ", found " << number_text(value));
     CORO_CHECK(positive ? value > 0.0 : value >= 0.0, InputError,
-               key << ": expected a number" << range << ", found " << value);
+               key << ": expected a number" << range << ", found " << number_text(value));
 }
 
 } // namespace
@@ -83,16 +94,33 @@ CaseRun::~CaseRun() = default;
 
 Index CaseRun::threads() const
 {
-    return static_cast<Index>(tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism));
+    // As `corocontact run` reports them: never more than the task arena has.
+    const auto allowed = tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism);
+    return static_cast<Index>(
+        std::min<std::size_t>(allowed, static_cast<std::size_t>(tbb::this_task_arena::max_concurrency())));
+}
+
+void CaseRun::check_can_step(Index n) const
+{
+    CORO_CHECK(m_diverged.empty(), NumericalError,
+               m_diverged << " (the state is what the failed step left; load the case again to go on)");
+    if (m_spec.simulation.analysis != Analysis::STATIC)
+        return;
+    const Index left = m_spec.simulation.load_steps - steps_done();
+    CORO_CHECK(n <= left, InputError,
+               "step(n = " << n << "): " << left << " of the " << m_spec.simulation.load_steps
+                           << " load steps of this static analysis are left (simulation.load_steps)");
 }
 
 void CaseRun::step()
 {
-    if (m_spec.simulation.analysis == Analysis::STATIC)
-        CORO_CHECK(steps_done() < m_spec.simulation.load_steps, InputError,
-                   "step(): all " << m_spec.simulation.load_steps << " load steps of this static analysis are done "
-                                  << "(simulation.load_steps)");
-    m_simulation->step();
+    check_can_step(1);
+    try {
+        m_simulation->step();
+    } catch (const NumericalError& e) {
+        m_diverged = e.what();
+        throw;
+    }
 }
 
 RunSummary CaseRun::summary() const
@@ -122,16 +150,20 @@ VtkSeriesWriter& CaseRun::writer()
         return *m_writer;
     const std::filesystem::path& dir = m_spec.simulation.output_dir;
     const std::string& name = m_spec.simulation.name;
-    m_lock = std::make_unique<OutputLock>(dir, "python3: corocontact.Simulation('" + m_spec.file.string() + "')");
-    if (!m_lock->stale_owner().empty())
-        m_output_notes.push_back(m_lock->path().string() + ": taking over the lock of a run that ended without " +
-                                 "removing it (" + m_lock->stale_owner() + ")");
+    // Kept only once the writer stands: a write that fails here lets the folder go again, so a
+    // retry (after the user fixed the cause) does not find its own lock.
+    auto lock = std::make_unique<OutputLock>(dir, "python3: corocontact.Simulation('" + m_spec.file.string() + "')");
+    std::vector<std::string> notes;
+    if (!lock->stale_owner().empty())
+        notes.push_back(lock->path().string() + ": taking over the lock of a run that ended without " +
+                        "removing it (" + lock->stale_owner() + ")");
     const RemovedFiles removed = remove_earlier_run(dir, name, -1, false);
     if (removed.files > 0)
-        m_output_notes.push_back("removed " + std::to_string(removed.files) + " files (" +
-                                 std::to_string(removed.frames) + " frames) of an earlier run of " + name + " from " +
-                                 dir.string());
+        notes.push_back("removed " + std::to_string(removed.files) + " files (" + std::to_string(removed.frames) +
+                        " frames) of an earlier run of " + name + " from " + dir.string());
     m_writer = std::make_unique<VtkSeriesWriter>(dir, name);
+    m_lock = std::move(lock);
+    m_output_notes.insert(m_output_notes.end(), notes.begin(), notes.end());
     return *m_writer;
 }
 
@@ -145,6 +177,7 @@ std::filesystem::path CaseRun::write_summary()
 
 std::filesystem::path CaseRun::write_frame()
 {
+    CORO_CHECK(m_diverged.empty(), NumericalError, m_diverged << " (a frame of this state would be meaningless)");
     const Index step = steps_done();
     CORO_CHECK(step != m_last_frame, InputError,
                "write_frame(): the frame of step " << step << " is already written (step first)");
@@ -165,6 +198,35 @@ Body& CaseRun::body(Index b)
     return m_loaded.scene.bodies[static_cast<std::size_t>(b)];
 }
 
+void CaseRun::check_scales(const CaseSpec& spec, const char* what) const
+{
+    for (std::size_t b = 0; b < spec.bodies.size(); ++b)
+        check_scales(spec, static_cast<Index>(b), spec.bodies[b], what);
+}
+
+void CaseRun::check_scales(const CaseSpec& spec, Index b, const BodySpec& body_spec, const std::string& what) const
+{
+    try {
+        check_magnitudes(spec, body_spec, scene().bodies[static_cast<std::size_t>(b)].mesh());
+    } catch (const InputError& error) {
+        throw InputError(what + ": " + error.what());
+    }
+}
+
+namespace {
+
+/// The row of `rows` with the largest norm (zero for none).
+Vec3 largest_row(CRef<Positions> rows)
+{
+    Vec3 largest = Vec3::Zero();
+    for (Index v = 0; v < rows.rows(); ++v)
+        if (rows.row(v).stableNorm() > largest.stableNorm())
+            largest = rows.row(v).transpose();
+    return largest;
+}
+
+} // namespace
+
 void CaseRun::set_velocities(Index b, CRef<Positions> velocities)
 {
     Body& target = body(b);
@@ -178,6 +240,9 @@ void CaseRun::set_velocities(Index b, CRef<Positions> velocities)
                    "body '" << target.name() << "': velocities[" << node << "] = " << format_row(velocities.row(node))
                             << ": node " << node << " is fixed, expected velocity 0 there");
     }
+    BodySpec scaled = m_spec.bodies[static_cast<std::size_t>(b)]; // the fastest node as its velocity
+    scaled.velocity = largest_row(velocities);
+    check_scales(m_spec, b, scaled, "body '" + target.name() + "': velocities");
     target.velocities() = target.from_input_order(velocities);
     m_simulation->update_contact_response();
 }
@@ -206,6 +271,11 @@ void CaseRun::set_loads(Index b, CRef<Positions> loads)
     CORO_CHECK(bad < 0, InputError,
                "body '" << target.name() << "': loads[" << bad << "] = " << format_row(loads.row(bad))
                         << ": expected finite numbers");
+    // The largest node force as the force per node, and that on every node as the total.
+    BodySpec scaled = m_spec.bodies[static_cast<std::size_t>(b)];
+    scaled.loads.assign(1, BoxLoad{});
+    scaled.loads[0].force = largest_row(loads) * static_cast<double>(target.num_vertices());
+    check_scales(m_spec, b, scaled, "body '" + target.name() + "': loads");
     target.load_forces() = target.from_input_order(loads);
 }
 
@@ -230,6 +300,9 @@ void CaseRun::set_gravity(const Vec3& gravity)
 {
     CORO_CHECK(gravity.allFinite(), InputError,
                "gravity = " << format_row(gravity.transpose()) << ": expected finite numbers");
+    CaseSpec changed = m_spec;
+    changed.simulation.gravity = gravity;
+    check_scales(changed, "gravity");
     m_spec.simulation.gravity = gravity;
 }
 
@@ -247,6 +320,9 @@ void CaseRun::set_contact_stiffness(double stiffness)
 {
     check_contact_applies("contact.stiffness");
     check_number(stiffness, true, "contact.stiffness");
+    CaseSpec changed = m_spec;
+    changed.contact.stiffness = stiffness;
+    check_scales(changed, "contact.stiffness");
     m_spec.contact.stiffness = stiffness;
     m_simulation->update_contact_response();
 }
@@ -255,6 +331,9 @@ void CaseRun::set_contact_damping(double damping)
 {
     check_contact_applies("contact.damping");
     check_number(damping, false, "contact.damping");
+    CaseSpec changed = m_spec;
+    changed.contact.damping = damping;
+    check_scales(changed, "contact.damping");
     m_spec.contact.damping = damping;
     m_simulation->update_contact_response();
 }
@@ -263,7 +342,10 @@ void CaseRun::set_contact_friction(double friction)
 {
     check_contact_applies("contact.friction");
     CORO_CHECK(friction >= 0.0 && friction <= MAX_FRICTION, InputError, // false for NaN too
-               "contact.friction: expected a number in [0, " << MAX_FRICTION << "], found " << friction);
+               "contact.friction: expected a number in [0, " << MAX_FRICTION << "], found " << number_text(friction));
+    CaseSpec changed = m_spec;
+    changed.contact.friction = friction;
+    check_scales(changed, "contact.friction");
     m_spec.contact.friction = friction;
     m_simulation->update_contact_response();
 }

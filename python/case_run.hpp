@@ -46,8 +46,13 @@ public:
     /// Worker threads TBB uses now (what summary.json reports).
     Index threads() const;
 
+    /// Refuses n more steps before any is taken: after a divergence (NumericalError, its
+    /// message), or beyond the last load step of a static analysis (InputError).
+    void check_can_step(Index n) const;
     /// One time step or load step (Simulation::step).
-    /// @throws NumericalError when the simulation diverges ("step N (t = ...): ...")
+    /// @throws NumericalError when the simulation diverges ("step N (t = ...): ..."); the
+    ///         object then refuses step() and write_frame() (a half-taken step leaves no
+    ///         meaningful state)
     /// @throws InputError for a static analysis whose load steps are all done
     void step();
     Index steps_done() const { return m_simulation->steps_done(); }
@@ -69,6 +74,7 @@ public:
     /// `corocontact run` does before it writes.
     /// @return the .pvd path
     /// @throws InputError if this step's frame is already written
+    /// @throws NumericalError after a divergence
     /// @throws OutputError if another run holds the folder, or a file cannot be written
     std::filesystem::path write_frame();
     /// OUT/NAME.pvd.
@@ -97,6 +103,10 @@ public:
 
 private:
     Body& body(Index b);
+    /// The load-time scale check (io/magnitudes.hpp) of every body, or of body b with
+    /// `body_spec`, under `spec`; InputError prefixed with `what` (the value being set).
+    void check_scales(const CaseSpec& spec, const char* what) const;
+    void check_scales(const CaseSpec& spec, Index b, const BodySpec& body_spec, const std::string& what) const;
     void check_contact_applies(const char* key) const;
     /// The lock on the output folder and the series writer, made at the first write.
     VtkSeriesWriter& writer();
@@ -109,6 +119,7 @@ private:
     std::unique_ptr<OutputLock> m_lock;              // taken by the first write
     std::unique_ptr<VtkSeriesWriter> m_writer;       // made by the first write
     std::vector<std::string> m_output_notes;
+    std::string m_diverged;                          // a step's NumericalError, or empty
     Index m_last_frame = -1;                         // step of the last frame written
     double m_output_s = 0.0;                         // time spent in write_frame() [s]
     double m_setup_s = 0.0;                          // reading and loading the case [s]

@@ -23,11 +23,19 @@ py::handle new_warning(py::module_& m, const char* name, const char* doc)
 }
 } // namespace
 
+py::str text(const std::string& message)
+{
+    PyObject* decoded = PyUnicode_DecodeUTF8(message.data(), static_cast<Py_ssize_t>(message.size()), "replace");
+    if (decoded == nullptr)
+        throw py::error_already_set();
+    return py::reinterpret_steal<py::str>(decoded);
+}
+
 void warn(const std::vector<std::string>& warnings, WarningKind kind)
 {
     const py::handle category = kind == WarningKind::INPUT ? g_input_warning : g_output_warning;
     for (const std::string& warning : warnings)
-        if (PyErr_WarnEx(category.ptr(), warning.c_str(), 1) != 0)
+        if (PyErr_WarnEx(category.ptr(), text(warning).cast<std::string>().c_str(), 1) != 0)
             throw py::error_already_set();
 }
 
@@ -41,9 +49,25 @@ PYBIND11_MODULE(corocontact, m)
     m.attr("__version__") = CORO_VERSION;
     // Bad input (exit code 2 of the command), divergence (3) and output that cannot be written
     // (4), with the command's messages.
-    py::register_exception<coro::InputError>(m, "InputError", PyExc_ValueError);
-    py::register_exception<coro::NumericalError>(m, "NumericalError", PyExc_RuntimeError);
-    py::register_exception<coro::OutputError>(m, "OutputError", PyExc_OSError);
+    // Messages may hold bytes that are not UTF-8 (a path's): decoded with U+FFFD for those.
+    static py::exception<coro::InputError> input_error(m, "InputError", PyExc_ValueError);
+    static py::exception<coro::NumericalError> numerical_error(m, "NumericalError", PyExc_RuntimeError);
+    static py::exception<coro::OutputError> output_error(m, "OutputError", PyExc_OSError);
+    py::register_exception_translator([](std::exception_ptr thrown) {
+        const auto raise = [](const py::handle type, const std::exception& e) {
+            PyErr_SetObject(type.ptr(), text(e.what()).ptr());
+        };
+        try {
+            if (thrown)
+                std::rethrow_exception(thrown);
+        } catch (const coro::InputError& e) {
+            raise(input_error, e);
+        } catch (const coro::NumericalError& e) {
+            raise(numerical_error, e);
+        } catch (const coro::OutputError& e) {
+            raise(output_error, e);
+        }
+    });
     g_input_warning = new_warning(m, "InputWarning", "What the corocontact command warns about its input.");
     g_output_warning = new_warning(m, "OutputWarning",
                                    "What the corocontact command tells about its output folder (a stale lock "

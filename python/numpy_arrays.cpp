@@ -25,10 +25,32 @@ std::string shape_of(const py::array& array)
     return text.str();
 }
 
-DoubleArray numbers_from(const py::handle& object, const std::string& what)
+/// The type of `object` as Python names it ("list", "numpy.ndarray").
+std::string type_name(const py::handle& object) { return py::str(py::type::of(object)).cast<std::string>(); }
+
+/// `object` as a numpy array of real numbers (dtype kinds integer, unsigned, float, and bool
+/// where `bools` says so), not yet converted: strings, complex numbers, dates, objects and
+/// masked arrays are refused rather than converted by numpy's casts.
+py::array real_array(const py::handle& object, const std::string& what, bool bools)
 {
-    DoubleArray array = DoubleArray::ensure(object);
-    CORO_CHECK(array, InputError, what << ": expected an array of numbers, found " << py::str(py::type::of(object)).cast<std::string>());
+    const py::module_ numpy = py::module_::import("numpy");
+    CORO_CHECK(!py::isinstance(object, numpy.attr("ma").attr("MaskedArray")), InputError,
+               what << ": expected an array of numbers, found a masked array (fill it first: numpy.ma.filled)");
+    const py::array array = py::array::ensure(object);
+    CORO_CHECK(array, InputError, what << ": expected an array of numbers, found " << type_name(object));
+    const char kind = array.dtype().kind();
+    CORO_CHECK(kind == 'f' || kind == 'i' || kind == 'u' || (bools && kind == 'b'), InputError,
+               what << ": expected an array of " << (bools ? "booleans or numbers" : "numbers (integers or floats)")
+                    << ", found dtype " << py::str(array.dtype()).cast<std::string>());
+    return array;
+}
+
+DoubleArray numbers_from(const py::handle& object, const std::string& what, bool bools = false)
+{
+    const py::array any = real_array(object, what, bools);
+    DoubleArray array = DoubleArray::ensure(any);
+    CORO_CHECK(array, InputError, what << ": numpy could not convert the array of shape " << shape_of(any)
+                                       << " to float64 (out of memory?)");
     return array;
 }
 
@@ -89,6 +111,8 @@ py::array read_only(py::array array)
     return array;
 }
 
+py::object read_only_view(const py::object& array) { return array.attr("view")(); }
+
 Positions rows_from(const py::handle& object, Index rows, const std::string& what)
 {
     const DoubleArray array = numbers_from(object, what);
@@ -106,12 +130,16 @@ Positions rows_from(const py::handle& object, Index rows, const std::string& wha
 
 std::vector<char> flags_from(const py::handle& object, Index size, const std::string& what)
 {
-    const DoubleArray array = numbers_from(object, what);
+    const DoubleArray array = numbers_from(object, what, true);
     CORO_CHECK(array.ndim() == 1 && array.shape(0) == size, InputError,
                what << ": expected an array of shape (" << size << ",), found " << shape_of(array));
     std::vector<char> flags(static_cast<std::size_t>(size));
-    for (Index i = 0; i < size; ++i)
-        flags[static_cast<std::size_t>(i)] = array.at(i) != 0.0 ? 1 : 0;
+    for (Index i = 0; i < size; ++i) {
+        const double value = array.at(i);
+        CORO_CHECK(value == 0.0 || value == 1.0, InputError,
+                   what << "[" << i << "] = " << value << ": expected True or False (or 1 or 0)");
+        flags[static_cast<std::size_t>(i)] = value == 1.0 ? 1 : 0;
+    }
     return flags;
 }
 
@@ -129,9 +157,10 @@ Eigen::Matrix<Index, Eigen::Dynamic, C, Eigen::RowMajor> indices_from(const py::
     const py::array any = py::array::ensure(object);
     CORO_CHECK(any && (any.dtype().kind() == 'i' || any.dtype().kind() == 'u'), InputError,
                what << ": expected an array of integers, found "
-                    << (any ? "dtype " + py::str(any.dtype()).cast<std::string>()
-                            : py::str(py::type::of(object)).cast<std::string>()));
+                    << (any ? "dtype " + py::str(any.dtype()).cast<std::string>() : type_name(object)));
     const auto array = py::array_t<std::int64_t, py::array::c_style | py::array::forcecast>::ensure(any);
+    CORO_CHECK(array, InputError, what << ": numpy could not convert the array of shape " << shape_of(any)
+                                       << " to int64 (out of memory?)");
     CORO_CHECK(array.ndim() == 2 && array.shape(1) == C, InputError,
                what << ": expected an array of shape (M, " << C << "), found " << shape_of(array));
     Eigen::Matrix<Index, Eigen::Dynamic, C, Eigen::RowMajor> result(array.shape(0), C);

@@ -12,6 +12,7 @@
 #include <pybind11/stl/filesystem.h>
 
 #include <atomic>
+#include <cstring>
 #include <memory>
 #include <optional>
 
@@ -43,6 +44,7 @@ public:
     {
         CORO_CHECK(n >= 0, InputError, "step(n = " << n << "): expected n >= 0");
         CaseRun& run = get();
+        run.check_can_step(n);
         for (Index i = 0; i < n; ++i) {
             {
                 Stepping stepping(m_stepping);
@@ -70,14 +72,37 @@ private:
     std::atomic<bool> m_stepping{false};
 };
 
+/// pybind11 (2.10; its issue #6153) gives the methods of an object made by `Class.__new__(Class)`
+/// without __init__ storage from the class's operator new that no constructor has run on.
+/// Zeroed, its null shared pointer lets every method refuse the object instead of reading garbage.
+struct ZeroedStorage {
+    static void* operator new(std::size_t size)
+    {
+        void* storage = ::operator new(size);
+        std::memset(storage, 0, size);
+        return storage;
+    }
+    static void operator delete(void* storage) { ::operator delete(storage); }
+};
+
+/// The run `run` points to; TypeError for an object __init__ never ran on (see ZeroedStorage).
+SharedRun& constructed(const std::shared_ptr<SharedRun>& run, const char* type)
+{
+    if (!run)
+        throw py::type_error(std::string("this corocontact.") + type + " was made by " + type +
+                             ".__new__ without __init__; use " +
+                             (std::string(type) == "Body" ? "Simulation(case_path).bodies" : "Simulation(case_path)"));
+    return *run;
+}
+
 /// One body of a Simulation. Constant arrays (rest positions, tets, faces, masses) are made
 /// once and handed out read-only; state arrays are fresh copies at every access.
-class BodyView {
+class BodyView : public ZeroedStorage {
 public:
     BodyView(std::shared_ptr<SharedRun> run, Index index) : m_run(std::move(run)), m_index(index) {}
 
-    const Body& body() const { return m_run->get().scene().bodies[static_cast<std::size_t>(m_index)]; }
-    CaseRun& run() const { return m_run->get(); }
+    const Body& body() const { return run().scene().bodies[static_cast<std::size_t>(m_index)]; }
+    CaseRun& run() const { return constructed(m_run, "Body").get(); }
     Index index() const { return m_index; }
     std::string what(const char* attribute) const { return "body '" + body().name() + "': " + attribute; }
 
@@ -85,13 +110,13 @@ public:
     {
         if (!m_rest_positions)
             m_rest_positions = read_only(to_numpy(body().to_input_order(body().fem().rest_dofs())));
-        return m_rest_positions;
+        return read_only_view(m_rest_positions);
     }
     py::object tets()
     {
         if (!m_tets)
             m_tets = read_only(to_numpy(body().input_tets()));
-        return m_tets;
+        return read_only_view(m_tets);
     }
     py::object surface_faces()
     {
@@ -99,7 +124,7 @@ public:
             const TetMesh input{body().to_input_order(body().fem().rest_dofs()), body().input_tets()};
             m_faces = read_only(to_numpy(boundary_faces(input)));
         }
-        return m_faces;
+        return read_only_view(m_faces);
     }
     py::object masses()
     {
@@ -110,7 +135,7 @@ public:
                 masses[body().input_node(v)] = internal[v];
             m_masses = read_only(to_numpy(masses));
         }
-        return m_masses;
+        return read_only_view(m_masses);
     }
 
 private:
@@ -120,15 +145,34 @@ private:
 };
 
 /// The Python side of a Simulation: the shared run and its Body objects.
-struct SimulationObject {
+struct SimulationObject : ZeroedStorage {
+    SharedRun& shared() const { return constructed(run, "Simulation"); }
     std::shared_ptr<SharedRun> run;
     py::tuple bodies;
 };
 
-void warn_about_loads_on_fixed_nodes(BodyView& view)
+/// Warns when the loads of the body fall on fixed nodes; `undo` takes back the change that made
+/// it so when a warnings filter turns the warning into an error (a refused value changes nothing).
+template <class Undo>
+void warn_about_loads_on_fixed_nodes(BodyView& view, Undo undo)
 {
-    if (const auto warning = view.run().loads_on_fixed_nodes(view.index()))
-        warn({*warning});
+    if (const auto warning = view.run().loads_on_fixed_nodes(view.index())) {
+        try {
+            warn({*warning});
+        } catch (...) {
+            undo();
+            throw;
+        }
+    }
+}
+
+/// The body's fixed flags in input node order.
+std::vector<char> input_order_fixed(const Body& body)
+{
+    std::vector<char> fixed(body.fixed().size());
+    for (Index v = 0; v < body.num_vertices(); ++v)
+        fixed[static_cast<std::size_t>(body.input_node(v))] = body.fixed()[static_cast<std::size_t>(v)];
+    return fixed;
 }
 
 const char* analysis_name(Analysis analysis) { return analysis == Analysis::STATIC ? "static" : "dynamic"; }
@@ -186,8 +230,9 @@ every node) to change them; fixed nodes must get 0.)doc")
                 return fixed;
             },
             [](BodyView& self, const py::handle& value) {
+                const std::vector<char> before = input_order_fixed(self.body());
                 self.run().set_fixed(self.index(), flags_from(value, self.body().num_vertices(), self.what("fixed")));
-                warn_about_loads_on_fixed_nodes(self);
+                warn_about_loads_on_fixed_nodes(self, [&] { self.run().set_fixed(self.index(), before); });
             },
             R"doc(N bool, True for a node held in place (a copy). Assign an N-array to change it: nodes
 fixed from now on stay where they are (velocity 0); released ones move from the next step.)doc")
@@ -195,8 +240,9 @@ fixed from now on stay where they are (velocity 0); released ones move from the 
             "loads",
             [](const BodyView& self) { return to_numpy(self.body().to_input_order(self.body().load_forces())); },
             [](BodyView& self, const py::handle& value) {
+                const Positions before = self.body().to_input_order(self.body().load_forces());
                 self.run().set_loads(self.index(), rows_from(value, self.body().num_vertices(), self.what("loads")));
-                warn_about_loads_on_fixed_nodes(self);
+                warn_about_loads_on_fixed_nodes(self, [&] { self.run().set_loads(self.index(), before); });
             },
             R"doc(constant external node forces, N×3 float64 [N] (a copy; the case's [[body.load]] boxes
 split over their nodes). Assign an N×3 array to change them. Gravity is separate
@@ -242,6 +288,8 @@ warnings while loading come as InputWarning. The initial detection runs here, so
 `contacts` is the contact state before the first step.)doc")
         .def(py::init([](const std::filesystem::path& case_path, std::optional<Index> threads,
                          std::optional<std::filesystem::path> output_dir) {
+                 CORO_CHECK(!output_dir || !output_dir->empty(), InputError,
+                            "output_dir = '': expected a path, or None for the case's simulation.output_dir");
                  SimulationObject object;
                  {
                      py::gil_scoped_release release; // loading a large case takes a while
@@ -254,18 +302,21 @@ warnings while loading come as InputWarning. The initial detection runs here, so
              }),
              "case_path"_a, "threads"_a = py::none(), "output_dir"_a = py::none())
         .def(
-            "step", [](SimulationObject& self, Index n) { self.run->step(n); }, "n"_a = 1,
+            "step", [](SimulationObject& self, Index n) { self.shared().step(n); }, "n"_a = 1,
             R"doc(Advances n time steps (a static analysis: n load steps). The GIL is released during
 each step. Raises NumericalError when the simulation diverges ("step N (t = ...): ..."), the
-message `corocontact run` prints with exit code 3.)doc")
-        .def_property_readonly("time", [](SimulationObject& self) { return self.run->get().time(); },
+message `corocontact run` prints with exit code 3; from then on step() and write_frame() raise it
+again (the state is what the failed step left). In a static analysis, n beyond the load steps
+left raises InputError before any step.)doc")
+        .def_property_readonly("time", [](SimulationObject& self) { return self.shared().get().time(); },
                                "simulated time after steps_done steps [s] (static: the load factor)")
-        .def_property_readonly("steps_done", [](SimulationObject& self) { return self.run->get().steps_done(); })
-        .def_property_readonly("bodies", [](SimulationObject& self) { return self.bodies; },
+        .def_property_readonly("steps_done", [](SimulationObject& self) { return self.shared().get().steps_done(); })
+        .def_property_readonly("bodies", [](SimulationObject& self) { self.shared(); return self.bodies; },
                                "the bodies, in case order (a tuple of Body)")
         .def(
             "body",
             [](SimulationObject& self, const std::string& name) -> py::object {
+                self.shared();
                 for (const py::handle body : self.bodies)
                     if (body.cast<const BodyView&>().body().name() == name)
                         return py::reinterpret_borrow<py::object>(body);
@@ -275,7 +326,7 @@ message `corocontact run` prints with exit code 3.)doc")
         .def_property_readonly(
             "contacts",
             [](SimulationObject& self) {
-                const Scene& scene = self.run->get().scene();
+                const Scene& scene = self.shared().get().scene();
                 return rows_dict(contact_rows(scene.surfaces, static_cast<Index>(scene.planes.size()), scene.contacts));
             },
             R"doc(what the last detection found (the initial state before the first step): a dict of
@@ -287,7 +338,7 @@ obstacles obstacle<k>, then planes plane<k>). Copies.)doc")
         .def(
             "write_frame",
             [](SimulationObject& self) {
-                CaseRun& run = self.run->get();
+                CaseRun& run = self.shared().get();
                 const std::filesystem::path pvd = run.write_frame();
                 warn(run.take_output_notes(), WarningKind::OUTPUT);
                 return pvd;
@@ -299,60 +350,65 @@ while this object lives) and removes what an earlier run of the series left ther
 `corocontact run` does; OutputError if another run holds the folder or a file cannot be
 written.)doc")
         .def(
-            "summary", [](SimulationObject& self) { return py::module_::import("json").attr("loads")(self.run->get().summary_json()); },
+            "summary", [](SimulationObject& self) { return py::module_::import("json").attr("loads")(self.shared().get().summary_json()); },
             "the counters so far as a dict, with the keys of OUT/NAME.summary.json")
         .def(
             "write_summary",
             [](SimulationObject& self) {
-                CaseRun& run = self.run->get();
+                CaseRun& run = self.shared().get();
                 const std::filesystem::path path = run.write_summary();
                 warn(run.take_output_notes(), WarningKind::OUTPUT);
                 return path;
             },
             "writes OUT/NAME.summary.json as `corocontact run` does at its end; returns its path")
         .def_property(
-            "gravity", [](SimulationObject& self) { return to_numpy(VecX(self.run->get().spec().simulation.gravity)); },
-            [](SimulationObject& self, const py::handle& value) { self.run->get().set_gravity(vec3_from(value, "gravity")); },
+            "gravity", [](SimulationObject& self) { return to_numpy(VecX(self.shared().get().spec().simulation.gravity)); },
+            [](SimulationObject& self, const py::handle& value) { self.shared().get().set_gravity(vec3_from(value, "gravity")); },
             "[simulation] gravity, 3 float64 [m/s²] (a copy); assign to change it")
-        .def_property_readonly("contact_enabled", [](SimulationObject& self) { return self.run->get().spec().contact.enabled; })
+        .def_property_readonly("contact_enabled", [](SimulationObject& self) { return self.shared().get().spec().contact.enabled; })
         .def_property(
-            "contact_stiffness", [](SimulationObject& self) { return self.run->get().spec().contact.stiffness; },
-            [](SimulationObject& self, double value) { self.run->get().set_contact_stiffness(value); },
+            "contact_stiffness", [](SimulationObject& self) { return self.shared().get().spec().contact.stiffness; },
+            [](SimulationObject& self, double value) { self.shared().get().set_contact_stiffness(value); },
             "[contact] stiffness [N/m], > 0")
         .def_property(
-            "contact_damping", [](SimulationObject& self) { return self.run->get().spec().contact.damping; },
-            [](SimulationObject& self, double value) { self.run->get().set_contact_damping(value); },
+            "contact_damping", [](SimulationObject& self) { return self.shared().get().spec().contact.damping; },
+            [](SimulationObject& self, double value) { self.shared().get().set_contact_damping(value); },
             "[contact] damping [N·s/m], >= 0")
         .def_property(
-            "contact_friction", [](SimulationObject& self) { return self.run->get().spec().contact.friction; },
-            [](SimulationObject& self, double value) { self.run->get().set_contact_friction(value); },
+            "contact_friction", [](SimulationObject& self) { return self.shared().get().spec().contact.friction; },
+            [](SimulationObject& self, double value) { self.shared().get().set_contact_friction(value); },
             "[contact] friction, the Coulomb coefficient, in [0, 10]")
-        .def_property_readonly("name", [](SimulationObject& self) { return self.run->get().spec().simulation.name; })
-        .def_property_readonly("analysis", [](SimulationObject& self) { return analysis_name(self.run->get().spec().simulation.analysis); })
-        .def_property_readonly("dt", [](SimulationObject& self) { return self.run->get().spec().simulation.dt; })
+        .def_property_readonly("name", [](SimulationObject& self) { return self.shared().get().spec().simulation.name; })
+        .def_property_readonly("analysis", [](SimulationObject& self) { return analysis_name(self.shared().get().spec().simulation.analysis); })
+        .def_property_readonly("dt", [](SimulationObject& self) { return self.shared().get().spec().simulation.dt; })
         .def_property_readonly(
             "last_step",
             [](SimulationObject& self) {
-                const SimulationSettings& s = self.run->get().spec().simulation;
+                const SimulationSettings& s = self.shared().get().spec().simulation;
                 return s.analysis == Analysis::STATIC ? s.load_steps : s.steps;
             },
             "the step `corocontact run` stops at: simulation.steps (dynamic) or load_steps (static)")
         .def_property_readonly(
             "output_every",
             [](SimulationObject& self) {
-                const SimulationSettings& s = self.run->get().spec().simulation;
+                const SimulationSettings& s = self.shared().get().spec().simulation;
                 return s.analysis == Analysis::STATIC ? 1 : s.output_every;
             },
             "`corocontact run` writes every output_every-th step: simulation.output_every (dynamic), 1 (static)")
-        .def_property_readonly("output_dir", [](SimulationObject& self) { return self.run->get().spec().simulation.output_dir; })
-        .def_property_readonly("series_path", [](SimulationObject& self) { return self.run->get().series_path(); },
+        .def_property_readonly("output_dir", [](SimulationObject& self) { return self.shared().get().spec().simulation.output_dir; })
+        .def_property_readonly("series_path", [](SimulationObject& self) { return self.shared().get().series_path(); },
                                "OUT/NAME.pvd, the series write_frame() writes")
-        .def_property_readonly("threads", [](SimulationObject& self) { return self.run->get().threads(); },
+        .def_property_readonly("threads", [](SimulationObject& self) { return self.shared().get().threads(); },
                                "worker threads TBB uses now")
-        .def_property_readonly("warnings", [](SimulationObject& self) { return self.run->get().load_warnings(); },
+        .def_property_readonly("warnings", [](SimulationObject& self) {
+                                   py::list warnings;
+                                   for (const std::string& warning : self.shared().get().load_warnings())
+                                       warnings.append(text(warning));
+                                   return warnings;
+                               },
                                "the warnings of loading (also given as InputWarning)")
         .def("__repr__", [](SimulationObject& self) {
-            CaseRun& run = self.run->get();
+            CaseRun& run = self.shared().get();
             return "<corocontact.Simulation '" + run.spec().simulation.name + "': " +
                    std::to_string(run.scene().bodies.size()) + " bodies, step " + std::to_string(run.steps_done()) +
                    ">";

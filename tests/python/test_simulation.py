@@ -262,9 +262,12 @@ def test_static_analysis_steps_its_load_steps_only(cli, tmp_path):
     cli("run", case, "--out", tmp_path / "cli", "--quiet", check_exit=0)
     sim = corocontact.Simulation(case, output_dir=tmp_path / "python")
     assert sim.analysis == "static" and sim.output_every == 1
+    with pytest.raises(corocontact.InputError, match=r"step\(n = 4\): 3 of the 3 load steps .* are left"):
+        sim.step(4)  # refused before any step
+    assert sim.steps_done == 0
     step_like_the_command(sim, sim.last_step)
     assert sim.time == 1.0
     for file in series_files(tmp_path / "cli"):  # every load step's frame, the same bytes
         assert (tmp_path / "cli" / file).read_bytes() == (tmp_path / "python" / file).read_bytes(), file
-    with pytest.raises(corocontact.InputError, match="load steps of this static analysis are done"):
+    with pytest.raises(corocontact.InputError, match=r"step\(n = 1\): 0 of the 3 load steps of this static analysis are left"):
         sim.step()
