@@ -604,6 +604,8 @@ int main(int argc, char** argv)
     // the run reports (exit 4) after finishing its frames and removing its output lock, rather
     // than killing the process with the lock left behind.
     std::signal(SIGPIPE, SIG_IGN);
+    // Likewise a file-size limit (`ulimit -f`): the write fails with EFBIG and the run exits 4.
+    std::signal(SIGXFSZ, SIG_IGN);
 #if CORO_WITH_MPI
     // Started by mpirun: the processes of a distributed run (docs/scale_out.md); alone: no MPI.
     std::unique_ptr<coro::MpiSession> session;

@@ -60,12 +60,13 @@ long summary_steps(const fs::path& summary)
     return std::regex_search(text, match, std::regex("\"steps\": ([0-9]+)")) ? std::stol(match[1]) : -1;
 }
 
-/// Runs the command under bash with a file-size limit of `kib` KiB (SIGXFSZ ignored, so a write
-/// beyond it fails with EFBIG, as on a full disk): a write failure anywhere, also as root.
+/// Runs the command under bash with a file-size limit of `kib` KiB: a write failure anywhere, also
+/// as root. SIGXFSZ keeps its default action (killing the process): the command ignores it, so
+/// that the write fails with EFBIG, as on a full disk.
 Outcome run_with_file_size_limit(long kib, const std::string& arguments, const fs::path& dir)
 {
     const fs::path out = dir / "stdout.txt", err = dir / "stderr.txt";
-    const std::string command = "bash -c \"trap '' XFSZ; ulimit -f " + std::to_string(kib) + "; exec " +
+    const std::string command = "bash -c \"trap - XFSZ; ulimit -f " + std::to_string(kib) + "; exec " +
                                 CORO_CLI_PATH + " " + arguments + "\" > " + out.string() + " 2> " + err.string() +
                                 " < /dev/null";
     const int status = std::system(command.c_str());
