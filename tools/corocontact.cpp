@@ -268,7 +268,9 @@ int run_case(const RunOptions& options, coro::Communicator* ranks)
         control.resume_summary = state.summary;
         std::size_t missing = 0;
         for (const coro::FrameRecord& frame : state.frames) {
-            if (std::filesystem::exists(spec.simulation.output_dir / frame_file(spec.simulation.name, frame.step)))
+            // What VtkSeriesWriter::adopt_frame accepts: checked here, before anything is removed.
+            if (std::filesystem::is_regular_file(spec.simulation.output_dir /
+                                                 frame_file(spec.simulation.name, frame.step)))
                 frames.push_back(frame);
             else
                 ++missing;
