@@ -65,6 +65,7 @@ struct Simulation::Ranks {
     std::size_t case_bodies = 0;   // bodies of all processes
     Index steps = 0;              // steps of this run
     Index cross_rank = 0;         // contacts detected here that touch another process, summed
+    Index detections = 0;         // detections of this run (a restart's totals hold the first run's)
 
     Ranks(const SceneDistribution& distribution, const Scene& scene, SceneMatrix& matrix, bool with_contact)
         : communicator(*distribution.communicator),
@@ -152,6 +153,7 @@ void Simulation::detect(RunSummary& summary)
         summary.contacts_mean += static_cast<double>(counts.contacts);
         summary.max_contact_depth = std::max(summary.max_contact_depth, counts.max_depth);
         m_ranks->cross_rank += counts.cross_rank;
+        ++m_ranks->detections;
         return;
     }
     update_contact_surfaces(m_scene.bodies, m_scene.surfaces);
@@ -358,7 +360,7 @@ RankStats Simulation::rank_stats() const
     std::int64_t cross_rank = m_ranks->cross_rank;
     m_ranks->communicator.all_reduce(&cross_rank, 1, Reduction::SUM);
     stats.cross_rank_contacts_mean =
-        m_totals.detections > 0 ? static_cast<double>(cross_rank) / static_cast<double>(m_totals.detections) : 0.0;
+        m_ranks->detections > 0 ? static_cast<double>(cross_rank) / static_cast<double>(m_ranks->detections) : 0.0;
     return stats;
 }
 

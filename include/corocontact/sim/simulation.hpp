@@ -70,8 +70,8 @@ struct RankStats {
     double mpi_bytes_per_step = 0.0;       ///< payload this process received from the others per
                                            ///< step of this run (solve and contact, not output) [B]
     double solve_bytes_per_step = 0.0;     ///< of those, in the PCG: halo and dot products [B]
-    double cross_rank_contacts_mean = 0.0; ///< contact points per detection whose nodes lie on two
-                                           ///< or more processes (all processes)
+    double cross_rank_contacts_mean = 0.0; ///< contact points per detection of this run whose
+                                           ///< nodes lie on two or more processes (all processes)
 };
 
 /// Called for every frame to write: (step, simulated time or load factor).
