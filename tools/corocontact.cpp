@@ -9,6 +9,7 @@
 #include <corocontact/core/atomic_file.hpp>
 #include <corocontact/core/collective.hpp>
 #include <corocontact/core/error.hpp>
+#include <corocontact/core/fingerprint.hpp>
 #include <corocontact/core/surface_mesh.hpp>
 #include <corocontact/core/surface_topology.hpp>
 #include <corocontact/io/case_reader.hpp>
@@ -200,6 +201,20 @@ int run_case(const RunOptions& options, coro::Communicator* ranks)
                                      << ranks->size()
                                      << " (mpirun): use \"block_jacobi\" or \"jacobi\" for a distributed run");
     });
+    // A process started with other options or another case file (an MPMD command line, a stale
+    // copy on one node) would mix scenes or wait in an exchange the others never enter.
+    if (ranks) {
+        std::uint64_t fingerprint = 0;
+        coro::run_collectively(ranks, [&] { fingerprint = coro::case_fingerprint(spec); });
+        for (const std::string& option : {spec.simulation.output_dir.string(), std::to_string(options.steps),
+                                          std::to_string(options.checkpoint_every), options.restart})
+            fingerprint = coro::fnv1a(option.data(), option.size() + 1, fingerprint); // with its '\0'
+        coro::require_same_on_every_process(ranks, fingerprint,
+                                            "the processes of this run were started with different options or "
+                                            "case files (--steps, --out, --checkpoint-every, --restart, or a case "
+                                            "file that differs between the nodes): run the same command on every "
+                                            "process");
+    }
     const auto checkpoint_every = static_cast<coro::Index>(options.checkpoint_every);
     // One run per output folder, claimed before the (possibly long) load; a run refused for bad
     // input removes its lock file again, and the folder if it made it.

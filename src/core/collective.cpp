@@ -2,6 +2,7 @@
 
 #include <corocontact/core/error.hpp>
 
+#include <cstring>
 #include <exception>
 #include <string>
 #include <vector>
@@ -54,6 +55,18 @@ void run_collectively(Communicator* communicator, FunctionRef<void()> work)
     case Kind::OTHER: break;
     }
     throw std::runtime_error(message);
+}
+
+void require_same_on_every_process(Communicator* communicator, std::uint64_t fingerprint, const std::string& message)
+{
+    if (communicator == nullptr)
+        return;
+    std::int64_t lowest, highest;
+    std::memcpy(&lowest, &fingerprint, sizeof lowest);
+    highest = lowest;
+    communicator->all_reduce(&lowest, 1, Reduction::MIN);
+    communicator->all_reduce(&highest, 1, Reduction::MAX);
+    CORO_CHECK(lowest == highest, InputError, message);
 }
 
 } // namespace coro

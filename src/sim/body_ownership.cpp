@@ -2,7 +2,9 @@
 
 #include <corocontact/contact/aabb.hpp>
 #include <corocontact/contact/broad_phase.hpp>
+#include <corocontact/core/collective.hpp>
 #include <corocontact/core/error.hpp>
+#include <corocontact/core/fingerprint.hpp>
 #include <corocontact/partition/graph_partition.hpp>
 #include <corocontact/sim/simulation.hpp>
 
@@ -81,8 +83,28 @@ std::vector<Index> keep_bodies_of(Scene& scene, const BodyOwnership& ownership, 
     return ids;
 }
 
+namespace {
+
+/// The bodies' names, rest positions and tets: what every process must have loaded alike.
+std::uint64_t scene_fingerprint(const Scene& scene)
+{
+    std::uint64_t hash = FNV1A_START;
+    for (const Body& body : scene.bodies) {
+        const TetMesh& mesh = body.mesh();
+        hash = fnv1a(body.name().data(), body.name().size(), hash);
+        hash = fnv1a(mesh.rest_positions.data(), sizeof(double) * static_cast<std::size_t>(mesh.rest_positions.size()), hash);
+        hash = fnv1a(mesh.tets.data(), sizeof(Index) * static_cast<std::size_t>(mesh.tets.size()), hash);
+    }
+    return hash;
+}
+
+} // namespace
+
 SceneDistribution distribute_scene(Scene& scene, Communicator& communicator)
 {
+    require_same_on_every_process(&communicator, scene_fingerprint(scene),
+                                  "the processes of this run loaded different bodies (a mesh file that differs "
+                                  "between the nodes?): every process must read the same files");
     SceneDistribution distribution;
     distribution.communicator = &communicator;
     distribution.ownership.num_ranks = communicator.size();

@@ -2,6 +2,7 @@
 
 #include <corocontact/core/atomic_file.hpp>
 #include <corocontact/core/error.hpp>
+#include <corocontact/core/fingerprint.hpp>
 
 #include <array>
 #include <cstring>
@@ -19,16 +20,6 @@ namespace {
 constexpr char MAGIC[8] = {'C', 'O', 'R', 'O', 'C', 'K', 'P', 'T'};
 constexpr char END[4] = {'E', 'N', 'D', '!'};
 constexpr std::uint32_t VERSION = 3;
-
-std::uint64_t fnv1a(const char* data, std::size_t size)
-{
-    std::uint64_t hash = 14695981039346656037ull;
-    for (std::size_t i = 0; i < size; ++i) {
-        hash ^= static_cast<unsigned char>(data[i]);
-        hash *= 1099511628211ull;
-    }
-    return hash;
-}
 
 std::size_t at(Index i) { return static_cast<std::size_t>(i); }
 

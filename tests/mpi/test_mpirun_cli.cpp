@@ -17,6 +17,8 @@
 #include <regex>
 #include <sstream>
 #include <string>
+#include <utility>
+#include <vector>
 
 namespace fs = std::filesystem;
 using ::testing::HasSubstr;
@@ -43,18 +45,32 @@ std::string slurp(const fs::path& path)
 // Runs corocontact with `arguments`, alone (ranks = 0) or under mpirun -np ranks. OpenMPI
 // refuses root without the two variables; on 2 shared cores its waits must yield the core.
 // Under ASan, OpenMPI's own leaks at exit are suppressed (lsan.supp), nothing else.
-Outcome corocontact(int ranks, const std::string& arguments, const fs::path& dir)
+const std::string MPIRUN = "OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_mpi_yield_when_idle=1 "
+                           "ASAN_OPTIONS=\"${ASAN_OPTIONS}:fast_unwind_on_malloc=0\" "
+                           "LSAN_OPTIONS=\"${LSAN_OPTIONS}:suppressions=" CORO_MPI_LSAN_SUPPRESSIONS "\" " +
+                           std::string(CORO_MPIEXEC) + " --oversubscribe --bind-to none ";
+
+Outcome run_shell(const std::string& command, const fs::path& dir)
 {
     const fs::path out = dir / "stdout.txt", err = dir / "stderr.txt";
-    std::string command = std::string(CORO_CLI_PATH) + " " + arguments;
-    if (ranks > 0)
-        command = "OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_mpi_yield_when_idle=1 "
-                  "ASAN_OPTIONS=\"${ASAN_OPTIONS}:fast_unwind_on_malloc=0\" "
-                  "LSAN_OPTIONS=\"${LSAN_OPTIONS}:suppressions=" CORO_MPI_LSAN_SUPPRESSIONS "\" " +
-                  std::string(CORO_MPIEXEC) + " -np " + std::to_string(ranks) + " --oversubscribe --bind-to none " +
-                  command;
     const int status = std::system((command + " > " + out.string() + " 2> " + err.string() + " < /dev/null").c_str());
     return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, slurp(out), slurp(err)};
+}
+
+Outcome corocontact(int ranks, const std::string& arguments, const fs::path& dir)
+{
+    const std::string command = std::string(CORO_CLI_PATH) + " " + arguments;
+    return run_shell(ranks > 0 ? MPIRUN + "-np " + std::to_string(ranks) + " " + command : command, dir);
+}
+
+// One process in each working directory, each with its own arguments (mpirun's MPMD form).
+Outcome corocontact_in(const std::vector<std::pair<fs::path, std::string>>& processes, const fs::path& dir)
+{
+    std::string command = MPIRUN;
+    for (std::size_t p = 0; p < processes.size(); ++p)
+        command += (p > 0 ? " : " : "") + std::string("-np 1 -wdir ") + processes[p].first.string() + " " +
+                   CORO_CLI_PATH + " " + processes[p].second;
+    return run_shell(command, dir);
 }
 
 // Every frame file and the .pvd under `a` exist under `b` with the same bytes; the count.
@@ -126,6 +142,42 @@ TEST(MpirunRun, BadInputIsReportedOnceAndEveryProcessExitsWithTwo)
     EXPECT_THAT(outcome.err, HasSubstr("typo.toml:"));
     EXPECT_THAT(outcome.err, HasSubstr("stifness"));
     EXPECT_FALSE(fs::exists(dir / "out")) << "nothing written for bad input";
+}
+
+TEST(MpirunRun, ProcessesGivenOtherOptionsOrFilesStopWithTwo)
+{
+    const fs::path dir = coro::test::scratch_dir("mpirun_mismatch");
+    const std::string pile = DATA + "/touching_pile.toml", out = (dir / "out").string();
+    // Another --steps on the second process: it would wait in an exchange the first never enters.
+    Outcome outcome = corocontact_in({{dir, "run " + pile + " --steps 3 --quiet --out " + out},
+                                      {dir, "run " + pile + " --steps 4 --quiet --out " + out}},
+                                     dir);
+    EXPECT_EQ(outcome.exit_code, 2);
+    EXPECT_EQ(count(outcome.err, "error: "), 1u) << outcome.err;
+    EXPECT_THAT(outcome.err, HasSubstr("were started with different options or case files"));
+    EXPECT_FALSE(fs::exists(dir / "out"));
+    // The same case file on both "nodes", but its mesh file differs: one tet, twice as large.
+    const std::string tet_case = "[simulation]\ndt = 0.01\nsteps = 2\n[[body]]\nname = \"tet\"\nmesh = \"tet.node\"\n";
+    for (const auto& [node, size] : {std::pair{"node1", "1"}, std::pair{"node2", "2"}}) {
+        fs::create_directories(dir / node);
+        std::ofstream(dir / node / "tet.toml") << tet_case;
+        std::ofstream(dir / node / "tet.node")
+            << "4 3 0 0\n1 0 0 0\n2 " << size << " 0 0\n3 0 " << size << " 0\n4 0 0 " << size << "\n";
+        std::ofstream(dir / node / "tet.ele") << "1 4 0\n1 1 2 3 4\n";
+    }
+    outcome = corocontact_in({{dir / "node1", "run tet.toml --quiet --out " + out},
+                              {dir / "node2", "run tet.toml --quiet --out " + out}},
+                             dir);
+    EXPECT_EQ(outcome.exit_code, 2);
+    EXPECT_EQ(count(outcome.err, "error: "), 1u) << outcome.err;
+    EXPECT_THAT(outcome.err, HasSubstr("loaded different bodies"));
+    EXPECT_FALSE(fs::exists(dir / "out"));
+    // The same files on both: it runs.
+    fs::copy_file(dir / "node1" / "tet.node", dir / "node2" / "tet.node", fs::copy_options::overwrite_existing);
+    outcome = corocontact_in({{dir / "node1", "run tet.toml --quiet --out " + out},
+                              {dir / "node2", "run tet.toml --quiet --out " + out}},
+                             dir);
+    EXPECT_EQ(outcome.exit_code, 0) << outcome.err;
 }
 
 #if CORO_WITH_AMG

@@ -6,6 +6,9 @@
 #include <corocontact/core/communicator.hpp>
 #include <corocontact/core/function_ref.hpp>
 
+#include <cstdint>
+#include <string>
+
 namespace coro {
 
 /// Runs `work` here and makes its outcome common. If it throws on any process, every process
@@ -14,5 +17,11 @@ namespace coro {
 /// can report it and every process exits with the same code. Collective; `work` itself must not
 /// communicate. Without a communicator (one process) it only runs `work`.
 void run_collectively(Communicator* communicator, FunctionRef<void()> work);
+
+/// Throws InputError(`message`) on every process unless `fingerprint` is the same on all: the
+/// processes of a run must read the same files with the same options, or their exchanges would
+/// mix different scenes or wait for each other forever. Collective; nothing without a
+/// communicator.
+void require_same_on_every_process(Communicator* communicator, std::uint64_t fingerprint, const std::string& message);
 
 } // namespace coro

@@ -44,6 +44,7 @@ std::vector<Index> keep_bodies_of(Scene& scene, const BodyOwnership& ownership, 
 /// Splits a scene holding every body of the case over the processes and keeps this process's
 /// bodies in it: assign_bodies() on rank 0, its owners sent to all, so every process holds the
 /// same assignment. Collective.
+/// @throws InputError on every process if they did not all load the same bodies
 SceneDistribution distribute_scene(Scene& scene, Communicator& communicator);
 
 } // namespace coro
