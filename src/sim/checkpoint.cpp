@@ -4,7 +4,9 @@
 #include <corocontact/core/error.hpp>
 #include <corocontact/core/fingerprint.hpp>
 
+#include <algorithm>
 #include <array>
+#include <cmath>
 #include <cstring>
 #include <fstream>
 #include <iterator>
@@ -286,11 +288,19 @@ CheckpointState read_checkpoint(const fs::path& path, Scene& scene, const std::v
         const Index n = body.num_vertices(), n_tets = body.mesh().num_tets();
         for (VecX* values : {&body.positions(), &body.velocities()}) {
             const std::vector<double> nodes = r.get_doubles(at(3 * n), "body state");
+            // A run checkpoints only finite states: a NaN here is a damaged (or edited) file.
+            const auto bad = std::find_if(nodes.begin(), nodes.end(), [](double x) { return !std::isfinite(x); });
+            CORO_CHECK(bad == nodes.end(), InputError,
+                       where << ": corrupt checkpoint: body '" << body.name() << "': node "
+                             << (bad - nodes.begin()) / 3 << " has the non-finite "
+                             << (values == &body.positions() ? "position" : "velocity") << " component " << *bad);
             for (Index v = 0; v < n; ++v)
                 for (int d = 0; d < 3; ++d)
                     (*values)[3 * v + d] = nodes[at(3 * body.input_node(v) + d)];
         }
         const std::vector<double> saved = r.get_doubles(at(9 * n_tets), "rotations");
+        CORO_CHECK(std::all_of(saved.begin(), saved.end(), [](double x) { return std::isfinite(x); }), InputError,
+                   where << ": corrupt checkpoint: body '" << body.name() << "' has a non-finite rotation");
         std::vector<Mat3> rotations(at(n_tets));
         for (Index t = 0; t < n_tets; ++t)
             std::memcpy(rotations[at(t)].data(), saved.data() + 9 * at(body.input_tet(t)), 9 * sizeof(double));

@@ -144,26 +144,25 @@ void DivergenceCheck::check(const std::vector<Body>& bodies)
     }
 }
 
-std::string locate_non_finite(const std::vector<Body>& bodies)
+std::string locate_non_finite(const Body& body)
 {
-    for (const Body& body : bodies)
-        for (const auto& [what, values] : {std::pair<const char*, const VecX*>{"position", &body.positions()},
-                                           std::pair<const char*, const VecX*>{"velocity", &body.velocities()}}) {
-            if (values->allFinite())
-                continue;
-            Index input = std::numeric_limits<Index>::max();
-            double value = 0.0;
-            for (Index v = 0; v < body.num_vertices(); ++v)
-                for (int d = 0; d < 3; ++d)
-                    if (!std::isfinite((*values)[3 * v + d]) && body.input_node(v) < input) {
-                        input = body.input_node(v);
-                        value = (*values)[3 * v + d];
-                    }
-            std::ostringstream message;
-            message << "body '" << body.name() << "': " << what << " of node " << input << " (mesh file order) is "
-                    << value;
-            return message.str();
-        }
+    for (const auto& [what, values] : {std::pair<const char*, const VecX*>{"position", &body.positions()},
+                                       std::pair<const char*, const VecX*>{"velocity", &body.velocities()}}) {
+        if (values->allFinite())
+            continue;
+        Index input = std::numeric_limits<Index>::max();
+        double value = 0.0;
+        for (Index v = 0; v < body.num_vertices(); ++v)
+            for (int d = 0; d < 3; ++d)
+                if (!std::isfinite((*values)[3 * v + d]) && body.input_node(v) < input) {
+                    input = body.input_node(v);
+                    value = (*values)[3 * v + d];
+                }
+        std::ostringstream message;
+        message << "body '" << body.name() << "': " << what << " of node " << input << " (mesh file order) is "
+                << value;
+        return message.str();
+    }
     return {};
 }
 

@@ -16,6 +16,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cstring>
 #include <optional>
 #include <tuple>
 #include <string>
@@ -66,11 +67,12 @@ struct Simulation::Ranks {
     Index steps = 0;              // steps of this run
     Index cross_rank = 0;         // contacts detected here that touch another process, summed
     Index detections = 0;         // detections of this run (a restart's totals hold the first run's)
+    std::vector<Index> body_ids;  // the case index of each body of this process
 
     Ranks(const SceneDistribution& distribution, const Scene& scene, SceneMatrix& matrix, bool with_contact)
         : communicator(*distribution.communicator),
           exchange(communicator, chunk_bodies(distribution, matrix), matrix.num_block_rows()),
-          case_bodies(distribution.ownership.owner.size())
+          case_bodies(distribution.ownership.owner.size()), body_ids(distribution.body_ids)
     {
         // Until a detection joins them, every case body is a component of its own.
         matrix.set_components(distribution.body_ids, exchange.num_components());
@@ -279,6 +281,32 @@ void Simulation::start(Index resume_step, const RunSummary& resume)
     m_totals.wall_s += seconds_since(start);
 }
 
+std::string Simulation::first_non_finite() const
+{
+    Index first = -1; // case index of the first body with a non-finite value here
+    std::string where;
+    for (std::size_t b = 0; b < m_scene.bodies.size() && where.empty(); ++b) {
+        where = locate_non_finite(m_scene.bodies[b]);
+        first = where.empty() ? -1 : m_ranks ? m_ranks->body_ids[b] : static_cast<Index>(b);
+    }
+    if (!m_ranks)
+        return where;
+    // The first over every process's bodies, so that the message is the one of one process.
+    std::vector<char> mine(sizeof first + where.size());
+    std::memcpy(mine.data(), &first, sizeof first);
+    std::copy(where.begin(), where.end(), mine.begin() + sizeof first);
+    Index best = -1;
+    for (const std::vector<char>& theirs : m_ranks->communicator.all_gather(mine)) {
+        Index body;
+        std::memcpy(&body, theirs.data(), sizeof body);
+        if (body >= 0 && (best < 0 || body < best)) {
+            best = body;
+            where.assign(theirs.begin() + sizeof body, theirs.end());
+        }
+    }
+    return where;
+}
+
 void Simulation::step()
 {
     const auto start = std::chrono::steady_clock::now();
@@ -293,7 +321,7 @@ void Simulation::step()
         detect(m_totals);
     } catch (const NumericalError& error) {
         // Solvers name what failed; add where the first NaN/Inf is, in mesh file numbering.
-        const std::string where = locate_non_finite(m_scene.bodies);
+        const std::string where = first_non_finite();
         CORO_THROW(NumericalError, "step " << step << " (t = " << time_of(step) << "): " << error.what()
                                            << (where.empty() ? "" : "; first non-finite value: " + where));
     }

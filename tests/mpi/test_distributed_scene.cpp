@@ -17,6 +17,7 @@
 
 #include <cstring>
 #include <functional>
+#include <limits>
 #include <map>
 #include <string>
 #include <vector>
@@ -342,4 +343,31 @@ density = 500.0
     if (world().size() == 2) {
         EXPECT_NE(outcome.ownership.owner[0], outcome.ownership.owner[2]);
     }
+}
+
+TEST(DistributedScene, ANonFiniteValueIsNamedAsInOneProcess)
+{
+    // NaN velocities in two bodies, which on 2 or 3 processes lie on different ones: every
+    // process names the first of them in case order, as one process does.
+    const CaseSpec spec = parse_case(touching_boxes(3), "distributed.toml");
+    LoadedScene loaded = load_scene(spec);
+    SceneDistribution distribution;
+    distribution.communicator = &world();
+    distribution.ownership = assign_bodies(loaded.scene.bodies, world().size());
+    ASSERT_NE(distribution.ownership.owner[1], distribution.ownership.owner[5]);
+    distribution.body_ids = keep_bodies_of(loaded.scene, distribution.ownership, world().rank());
+    for (std::size_t b = 0; b < distribution.body_ids.size(); ++b)
+        if (distribution.body_ids[b] == 1 || distribution.body_ids[b] == 5)
+            loaded.scene.bodies[b].velocities().setConstant(std::numeric_limits<double>::quiet_NaN());
+    Simulation simulation(loaded.scene, spec, &distribution);
+    simulation.start();
+    const std::string expected = "; first non-finite value: body 'box0_1': velocity of node 0 (mesh file order) is nan";
+    EXPECT_THAT([&] { simulation.step(); }, ::testing::ThrowsMessage<NumericalError>(::testing::EndsWith(expected)));
+
+    LoadedScene alone = load_scene(spec);
+    for (const Index b : {1, 5})
+        alone.scene.bodies[at(b)].velocities().setConstant(std::numeric_limits<double>::quiet_NaN());
+    Simulation one(alone.scene, spec);
+    one.start();
+    EXPECT_THAT([&] { one.step(); }, ::testing::ThrowsMessage<NumericalError>(::testing::EndsWith(expected)));
 }

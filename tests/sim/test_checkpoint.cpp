@@ -11,6 +11,7 @@
 #include <algorithm>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <iterator>
 #include <string>
 
@@ -183,6 +184,14 @@ TEST(Checkpoint, RejectsTruncatedForeignAndOtherCaseFiles)
                 ThrowsMessage<InputError>(HasSubstr("absent.checkpoint")));
     EXPECT_THAT([&] { read(dir / "good.checkpoint", fingerprint + 1); },
                 ThrowsMessage<InputError>(HasSubstr("another case file")));
+
+    // A checksum that fits but a NaN in the state (an edited file): refused, not run into exit 3.
+    Loaded with_nan = load(case_file);
+    with_nan.scene().bodies[1].velocities().setConstant(std::numeric_limits<double>::quiet_NaN());
+    write_checkpoint(dir / "nan.checkpoint", with_nan.scene(), {3, {}, {}}, fingerprint);
+    EXPECT_THAT([&] { read(dir / "nan.checkpoint", fingerprint); },
+                ThrowsMessage<InputError>(HasSubstr("nan.checkpoint: corrupt checkpoint: body 'right': node 0 has the "
+                                                    "non-finite velocity component nan")));
 
     // Same case file text but one body fewer: the body table must not match.
     std::string one_body = CASE;

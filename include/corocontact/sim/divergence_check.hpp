@@ -64,10 +64,10 @@ private:
     std::vector<DivergenceFinding> m_findings; // check()'s per body, kept between calls
 };
 
-/// Where the first non-finite position or velocity is, for a message after a solver reported a
-/// NaN or Inf: "body 'left': velocity of node 12 (mesh file order) is nan", or "" if all are
-/// finite. Serial; only meant for the error path.
-std::string locate_non_finite(const std::vector<Body>& bodies);
+/// Where the body's first non-finite position or velocity is, for a message after a solver
+/// reported a NaN or Inf: "body 'left': velocity of node 12 (mesh file order) is nan", or "" if
+/// all are finite. Serial; only meant for the error path.
+std::string locate_non_finite(const Body& body);
 
 /// DivergenceCheck(…).find() for one body, without keeping the precomputed data.
 DivergenceFinding find_divergence(const Body& body, const DivergenceLimits& limits = {});

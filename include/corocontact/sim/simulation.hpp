@@ -166,6 +166,9 @@ private:
     void collectively(FunctionRef<void()> work);
     /// The counters of all processes (collective when distributed); *_mean fields still sums.
     RunSummary totals() const;
+    /// locate_non_finite() of the first body, in case order, with a non-finite value on any
+    /// process (collective when distributed), or "".
+    std::string first_non_finite() const;
 
     Scene& m_scene;
     const CaseSpec& m_spec;
