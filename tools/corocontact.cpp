@@ -133,6 +133,34 @@ std::ostream& null_stream()
     return null;
 }
 
+/// Every process's warnings about its bodies on rank 0 (empty elsewhere), in the case order of
+/// the body each names ("body 'NAME'"), so that they read as one process's would.
+std::vector<std::string> gather_body_warnings(coro::Communicator& ranks, const std::vector<std::string>& mine,
+                                              const coro::CaseSpec& spec)
+{
+    std::vector<char> bytes;
+    for (const std::string& warning : mine) {
+        bytes.insert(bytes.end(), warning.begin(), warning.end());
+        bytes.push_back('\0');
+    }
+    std::vector<std::pair<std::size_t, std::string>> all; // (case index of the body named, warning)
+    for (const std::vector<char>& theirs : ranks.gather(bytes, 0))
+        for (auto begin = theirs.begin(); begin != theirs.end();) {
+            const auto end = std::find(begin, theirs.end(), '\0');
+            std::string warning(begin, end);
+            std::size_t body = 0;
+            while (body < spec.bodies.size() && warning.find("body '" + spec.bodies[body].name + "'") == std::string::npos)
+                ++body;
+            all.emplace_back(body, std::move(warning));
+            begin = end == theirs.end() ? end : end + 1;
+        }
+    std::stable_sort(all.begin(), all.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+    std::vector<std::string> warnings;
+    for (auto& [body, warning] : all)
+        warnings.push_back(std::move(warning));
+    return warnings;
+}
+
 const char* signal_name(int signal_number)
 {
     return signal_number == SIGINT ? "SIGINT" : signal_number == SIGTERM ? "SIGTERM" : "a signal";
@@ -274,6 +302,8 @@ int run_case(const RunOptions& options, coro::Communicator* ranks)
                                                   fingerprint, warnings)
                           : coro::read_checkpoint(options.restart, scene, fingerprint, warnings);
         });
+        if (ranks)
+            warnings = gather_body_warnings(*ranks, warnings, spec);
         for (const std::string& warning : warnings)
             messages << "warning: " << warning << "\n";
         CORO_CHECK(state.step < last_step, InputError,

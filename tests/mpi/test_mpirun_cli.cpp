@@ -5,6 +5,7 @@
 #include "mesh_fixtures.hpp"
 
 #include <corocontact/config.hpp>
+#include <corocontact/core/fingerprint.hpp>
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
@@ -12,6 +13,7 @@
 #include <sys/wait.h>
 
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <regex>
@@ -104,6 +106,43 @@ std::size_t count(const std::string& text, const std::string& what)
     return n;
 }
 
+// `checkpoint` with every body's METIS part count raised by one, its checksum made to fit
+// again (the layout of src/sim/checkpoint.cpp: magic, version, fingerprint, body count, then
+// per body a 32-bit name length, the name, nodes, tets and parts as int64; the FNV-1a of all
+// before it last): what a checkpoint from a machine with other cores looks like.
+void raise_part_counts(const fs::path& checkpoint)
+{
+    std::string bytes = slurp(checkpoint);
+    std::size_t at = 8 + 4 + 8;
+    std::uint64_t bodies;
+    std::memcpy(&bodies, bytes.data() + at, sizeof bodies);
+    at += 8;
+    for (std::uint64_t b = 0; b < bodies; ++b) {
+        std::uint32_t length;
+        std::memcpy(&length, bytes.data() + at, sizeof length);
+        at += 4 + length + 16;
+        std::int64_t parts;
+        std::memcpy(&parts, bytes.data() + at, sizeof parts);
+        ++parts;
+        std::memcpy(bytes.data() + at, &parts, sizeof parts);
+        at += 8;
+    }
+    const std::uint64_t checksum = coro::fnv1a(bytes.data(), bytes.size() - 8);
+    std::memcpy(bytes.data() + bytes.size() - 8, &checksum, sizeof checksum);
+    std::ofstream(checkpoint, std::ios::binary) << bytes;
+}
+
+// The lines of `text` that hold `what`.
+std::vector<std::string> lines_with(const std::string& text, const std::string& what)
+{
+    std::vector<std::string> lines;
+    std::istringstream stream(text);
+    for (std::string line; std::getline(stream, line);)
+        if (line.find(what) != std::string::npos)
+            lines.push_back(line);
+    return lines;
+}
+
 } // namespace
 
 TEST(MpirunRun, FramesAreBitwiseThoseOfOneProcessOnTwoAndThreeProcesses)
@@ -142,6 +181,36 @@ TEST(MpirunRun, BadInputIsReportedOnceAndEveryProcessExitsWithTwo)
     EXPECT_THAT(outcome.err, HasSubstr("typo.toml:"));
     EXPECT_THAT(outcome.err, HasSubstr("stifness"));
     EXPECT_FALSE(fs::exists(dir / "out")) << "nothing written for bad input";
+}
+
+TEST(MpirunRun, ARestartWarnsAboutEveryBodyAsOneProcessDoes)
+{
+    // Parts that differ from the checkpoint's are warned about body by body; on several
+    // processes the warnings of every process's bodies, in case order, as alone.
+    const fs::path dir = coro::test::scratch_dir("mpirun_restart_parts");
+    const std::string pile = DATA + "/touching_pile.toml";
+    const fs::path first = dir / "first";
+    Outcome outcome = corocontact(0, "run " + pile + " --steps 10 --checkpoint-every 10 --quiet --out " + first.string(), dir);
+    ASSERT_EQ(outcome.exit_code, 0) << outcome.err;
+    const fs::path checkpoint = dir / "other_machine.checkpoint";
+    fs::copy_file(first / "touching_pile.checkpoint", checkpoint);
+    raise_part_counts(checkpoint);
+    std::vector<std::string> alone;
+    for (const int ranks : {0, 2, 3}) {
+        const fs::path out = dir / ("np" + std::to_string(ranks));
+        fs::create_directories(out);
+        outcome = corocontact(ranks, "run " + pile + " --steps 12 --quiet --restart " + checkpoint.string() +
+                                         " --out " + out.string(), dir);
+        ASSERT_EQ(outcome.exit_code, 0) << outcome.err;
+        const std::vector<std::string> warnings = lines_with(outcome.err, "METIS parts when saved");
+        if (ranks == 0) {
+            alone = warnings;
+            EXPECT_EQ(alone.size(), 12u) << outcome.err;
+            EXPECT_THAT(alone.front(), HasSubstr("body 'b00' was split into"));
+        } else {
+            EXPECT_EQ(warnings, alone) << ranks << " processes";
+        }
+    }
 }
 
 TEST(MpirunRun, ProcessesGivenOtherOptionsOrFilesStopWithTwo)
