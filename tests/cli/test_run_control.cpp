@@ -30,6 +30,17 @@ using coro::test::wait_for_text;
 namespace {
 
 const std::string TWO_SPHERES = std::string(CORO_CASES_DIR) + "/two_spheres/two_spheres.toml";
+// A block falling for 4 steps, frames at steps 0 and 4.
+const std::string BLOCK = R"toml([simulation]
+dt = 0.01
+steps = 4
+[[body]]
+name = "block"
+shape = "box"
+min = [0.0, 0.0, 0.0]
+max = [2.0, 1.0, 1.0]
+cells = [4, 2, 2]
+)toml";
 
 // Every regular file under `a` (but the summary) exists under `b` with the same bytes; returns
 // how many were compared. `from_step` > 0 compares only the frames of steps ≥ from_step.
@@ -193,16 +204,7 @@ TEST(CorocontactRestart, AfterSigtermContinuesBitwise)
 TEST(CorocontactRestart, BadCheckpointsExitWithTwo)
 {
     const fs::path dir = coro::test::scratch_dir("cli_restart_bad");
-    const fs::path case_file = coro::test::write_text(dir / "block.toml", R"toml([simulation]
-dt = 0.01
-steps = 4
-[[body]]
-name = "block"
-shape = "box"
-min = [0.0, 0.0, 0.0]
-max = [2.0, 1.0, 1.0]
-cells = [4, 2, 2]
-)toml");
+    const fs::path case_file = coro::test::write_text(dir / "block.toml", BLOCK);
     const std::string out = (dir / "o").string();
     ASSERT_EQ(run("run " + case_file.string() + " --steps 2 --checkpoint-every 1 --quiet --out " + out, dir).exit_code, 0);
     const fs::path checkpoint = fs::path(out) / "block.checkpoint";
@@ -240,17 +242,9 @@ cells = [4, 2, 2]
 TEST(CorocontactRestart, AFrameThatIsNoLongerAFileIsLeftOutWithAWarning)
 {
     const fs::path dir = coro::test::scratch_dir("cli_restart_frame_dir");
-    const fs::path case_file = coro::test::write_text(dir / "block.toml", R"toml([simulation]
-dt = 0.01
-steps = 4
-output_every = 1
-[[body]]
-name = "block"
-shape = "box"
-min = [0.0, 0.0, 0.0]
-max = [2.0, 1.0, 1.0]
-cells = [4, 2, 2]
-)toml");
+    std::string every_step = BLOCK;
+    every_step.insert(every_step.find("[[body]]"), "output_every = 1\n");
+    const fs::path case_file = coro::test::write_text(dir / "block.toml", every_step);
     const fs::path out = dir / "o";
     ASSERT_EQ(run("run " + case_file.string() + " --steps 2 --checkpoint-every 2 --quiet --out " + out.string(), dir)
                   .exit_code,
