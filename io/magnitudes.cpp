@@ -239,6 +239,9 @@ void check_magnitudes(const CaseSpec& spec, const BodySpec& body, const TetMesh&
         check(std::string(dynamic ? "dt × " : "") + "contact.damping", {dt, {"contact.damping", contact.damping}});
         check("the friction force at a depth of one edge (friction × stiffness × edge)",
               {{"contact.friction", contact.friction}, stiffness, long_edge});
+        // The nearest-point test and the normals multiply four lengths (two squared ones).
+        check("a squared coordinate in contact detection", {{coordinate.name, coordinate.value, 2.0}});
+        check("a squared edge in contact detection", {{short_edge.name, short_edge.value, 2.0}});
     }
 
     if (g.largest_coordinate > 0.0 &&
@@ -250,9 +253,6 @@ void check_magnitudes(const CaseSpec& spec, const BodySpec& body, const TetMesh&
                                       "keep fewer than six significant digits of an edge, and strains would be "
                                       "rounding noise); move the body nearer the origin (translate) or use another "
                                       "length unit");
-    // Contact's nearest-point test and normals multiply four lengths (two squared ones).
-    check("a squared coordinate in contact detection", {{coordinate.name, coordinate.value, 2.0}});
-    check("a squared edge in contact detection", {{short_edge.name, short_edge.value, 2.0}});
     check_stiffness_to_mass_ratio(sim, spec.solver, body, g.shortest_edge);
 }
 

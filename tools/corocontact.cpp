@@ -134,30 +134,29 @@ std::ostream& null_stream()
 }
 
 /// Every process's warnings about its bodies on rank 0 (empty elsewhere), in the case order of
-/// the body each names ("body 'NAME'"), so that they read as one process's would.
-std::vector<std::string> gather_body_warnings(coro::Communicator& ranks, const std::vector<std::string>& mine,
-                                              const coro::CaseSpec& spec)
+/// their bodies, as one process gives them.
+std::vector<std::string> gather_body_warnings(coro::Communicator& ranks, const std::vector<coro::BodyWarning>& mine)
 {
     std::vector<char> bytes;
-    for (const std::string& warning : mine) {
-        bytes.insert(bytes.end(), warning.begin(), warning.end());
+    for (const auto& [body, text] : mine) {
+        const char* index = reinterpret_cast<const char*>(&body);
+        bytes.insert(bytes.end(), index, index + sizeof body);
+        bytes.insert(bytes.end(), text.begin(), text.end());
         bytes.push_back('\0');
     }
-    std::vector<std::pair<std::size_t, std::string>> all; // (case index of the body named, warning)
+    std::vector<coro::BodyWarning> all;
     for (const std::vector<char>& theirs : ranks.gather(bytes, 0))
-        for (auto begin = theirs.begin(); begin != theirs.end();) {
-            const auto end = std::find(begin, theirs.end(), '\0');
-            std::string warning(begin, end);
-            std::size_t body = 0;
-            while (body < spec.bodies.size() && warning.find("body '" + spec.bodies[body].name + "'") == std::string::npos)
-                ++body;
-            all.emplace_back(body, std::move(warning));
-            begin = end == theirs.end() ? end : end + 1;
+        for (auto at = theirs.begin(); at != theirs.end();) {
+            coro::Index body;
+            std::memcpy(&body, &*at, sizeof body);
+            const auto end = std::find(at + sizeof body, theirs.end(), '\0');
+            all.emplace_back(body, std::string(at + sizeof body, end));
+            at = end + 1;
         }
     std::stable_sort(all.begin(), all.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
     std::vector<std::string> warnings;
-    for (auto& [body, warning] : all)
-        warnings.push_back(std::move(warning));
+    for (auto& [body, text] : all)
+        warnings.push_back(std::move(text));
     return warnings;
 }
 
@@ -229,19 +228,14 @@ int run_case(const RunOptions& options, coro::Communicator* ranks)
                                      << ranks->size()
                                      << " (mpirun): use \"block_jacobi\" or \"jacobi\" for a distributed run");
     });
-    // A process started with other options or another case file (an MPMD command line, a stale
-    // copy on one node) would mix scenes or wait in an exchange the others never enter.
+    // The command lines are the same (main); the case file may still differ between the nodes.
     if (ranks) {
         std::uint64_t fingerprint = 0;
         coro::run_collectively(ranks, [&] { fingerprint = coro::case_fingerprint(spec); });
-        for (const std::string& option : {spec.simulation.output_dir.string(), std::to_string(options.steps),
-                                          std::to_string(options.checkpoint_every), options.restart})
-            fingerprint = coro::fnv1a(option.data(), option.size() + 1, fingerprint); // with its '\0'
         coro::require_same_on_every_process(ranks, fingerprint,
-                                            "the processes of this run were started with different options or "
-                                            "case files (--steps, --out, --checkpoint-every, --restart, or a case "
-                                            "file that differs between the nodes): run the same command on every "
-                                            "process");
+                                            options.case_file + ": the processes of this run read different case "
+                                                                "files (a stale copy on one node?): every process "
+                                                                "must read the same files");
     }
     const auto checkpoint_every = static_cast<coro::Index>(options.checkpoint_every);
     // One run per output folder, claimed before the (possibly long) load; a run refused for bad
@@ -296,14 +290,15 @@ int run_case(const RunOptions& options, coro::Communicator* ranks)
     std::vector<coro::FrameRecord> frames; // written so far, the first run's included
     if (!options.restart.empty()) {
         std::vector<std::string> warnings;
+        std::vector<coro::BodyWarning> body_warnings;
         coro::CheckpointState state;
         coro::run_collectively(ranks, [&] {
             state = ranks ? coro::read_checkpoint(options.restart, scene, distribution.body_ids, case_bodies,
-                                                  fingerprint, warnings)
+                                                  fingerprint, body_warnings)
                           : coro::read_checkpoint(options.restart, scene, fingerprint, warnings);
         });
         if (ranks)
-            warnings = gather_body_warnings(*ranks, warnings, spec);
+            warnings = gather_body_warnings(*ranks, body_warnings);
         for (const std::string& warning : warnings)
             messages << "warning: " << warning << "\n";
         CORO_CHECK(state.step < last_step, InputError,
@@ -727,12 +722,32 @@ int main(int argc, char** argv)
     threads_option(info_command); // after the command too, as run and detect take it
     info_command->set_version_flag("--version", std::string("corocontact ") + CORO_VERSION);
 
+    int parse_exit = -1;    // app.exit()'s code when the command line is not one to run
+    std::ostringstream help; // --help, --version: written to stdout (by rank 0), checked
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& error) {
-        std::ostringstream help; // --help, --version: written to stdout (by rank 0), checked
-        if (app.exit(error, help, root ? std::cerr : null_stream()) != 0)
+        parse_exit = app.exit(error, help, root ? std::cerr : null_stream());
+    }
+    // Processes started with other command lines (mpirun's MPMD form) would enter different
+    // exchanges, or none, and wait for each other forever.
+    if (ranks) {
+        std::uint64_t fingerprint = coro::fnv1a(&parse_exit, sizeof parse_exit);
+        for (int a = 1; a < argc; ++a)
+            fingerprint = coro::fnv1a(argv[a], std::strlen(argv[a]) + 1, fingerprint); // with its '\0'
+        try {
+            coro::require_same_on_every_process(ranks, fingerprint,
+                                                "the processes of this run were started with different command "
+                                                "lines: run the same command on every process");
+        } catch (const coro::InputError& error) {
+            if (root)
+                std::cerr << "error: " << error.what() << "\n";
             return EXIT_BAD_INPUT;
+        }
+    }
+    if (parse_exit > 0)
+        return EXIT_BAD_INPUT;
+    if (parse_exit == 0) {
         if (!root)
             return 0;
         try {

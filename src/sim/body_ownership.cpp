@@ -85,15 +85,17 @@ std::vector<Index> keep_bodies_of(Scene& scene, const BodyOwnership& ownership, 
 
 namespace {
 
-/// The bodies' names, rest positions and tets: what every process must have loaded alike.
+/// The bodies' names, rest positions and tets, in mesh file order (the internal order follows
+/// the METIS parts, which follow the node's cores): what every process must have loaded alike.
 std::uint64_t scene_fingerprint(const Scene& scene)
 {
     std::uint64_t hash = FNV1A_START;
     for (const Body& body : scene.bodies) {
-        const TetMesh& mesh = body.mesh();
+        const Positions rest = body.to_input_order(body.fem().rest_dofs());
+        const Tets tets = body.input_tets();
         hash = fnv1a(body.name().data(), body.name().size(), hash);
-        hash = fnv1a(mesh.rest_positions.data(), sizeof(double) * static_cast<std::size_t>(mesh.rest_positions.size()), hash);
-        hash = fnv1a(mesh.tets.data(), sizeof(Index) * static_cast<std::size_t>(mesh.tets.size()), hash);
+        hash = fnv1a(rest.data(), sizeof(double) * static_cast<std::size_t>(rest.size()), hash);
+        hash = fnv1a(tets.data(), sizeof(Index) * static_cast<std::size_t>(tets.size()), hash);
     }
     return hash;
 }

@@ -217,11 +217,15 @@ CheckpointState read_checkpoint(const fs::path& path, Scene& scene, std::uint64_
     std::vector<Index> ids(scene.bodies.size());
     for (std::size_t b = 0; b < ids.size(); ++b)
         ids[b] = static_cast<Index>(b);
-    return read_checkpoint(path, scene, ids, static_cast<Index>(ids.size()), fingerprint, warnings);
+    std::vector<BodyWarning> body_warnings;
+    CheckpointState state = read_checkpoint(path, scene, ids, static_cast<Index>(ids.size()), fingerprint, body_warnings);
+    for (BodyWarning& warning : body_warnings)
+        warnings.push_back(std::move(warning.second));
+    return state;
 }
 
 CheckpointState read_checkpoint(const fs::path& path, Scene& scene, const std::vector<Index>& body_ids,
-                                Index case_bodies, std::uint64_t fingerprint, std::vector<std::string>& warnings)
+                                Index case_bodies, std::uint64_t fingerprint, std::vector<BodyWarning>& warnings)
 {
     const std::string bytes = read_all(path, "checkpoint");
     const std::string where = path.string();
@@ -266,7 +270,7 @@ CheckpointState read_checkpoint(const fs::path& path, Scene& scene, const std::v
                          << " tets) does not match the case's body '" << body.name() << "' ("
                          << body.num_vertices() << " nodes, " << body.mesh().num_tets() << " tets)");
         if (parts != body.fem().layout().num_parts)
-            warnings.push_back(where + ": body '" + name + "' was split into " + std::to_string(parts) +
+            warnings.emplace_back(static_cast<Index>(k), where + ": body '" + name + "' was split into " + std::to_string(parts) +
                                " METIS parts when saved and into " + std::to_string(body.fem().layout().num_parts) +
                                " now (another machine?): the run continues, but not bitwise as uninterrupted");
     }

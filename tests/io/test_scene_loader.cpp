@@ -165,12 +165,15 @@ TEST(LoadScene, RefusesAStiffnessToMassRatioWhoseMassSingleValuesLose)
 
 TEST(LoadScene, RefusesLengthsWhoseFourthPowersContactCannotForm)
 {
-    // Scaled so that every product of the solver fits, only contact's squared lengths do not.
-    const std::string giant = "[[body]]\nname = \"giant\"\nshape = \"box\"\nmin = [0.0, 0.0, 0.0]\n"
+    // Scaled so that every product of the solver fits, only contact's squared lengths do not:
+    // refused with contact on, accepted without.
+    EXPECT_NO_THROW(load("giant_alone.toml", "[[body]]\nname = \"giant\"\nshape = \"box\"\nmin = [0.0, 0.0, 0.0]\n"
+                                             "max = [1e71, 1e71, 1e71]\ndensity = 1e-80\nyoung = 1e-60\n"));
+    const std::string giant = "[contact]\nenabled = true\n[[body]]\nname = \"giant\"\nshape = \"box\"\nmin = [0.0, 0.0, 0.0]\n"
                               "max = [1e71, 1e71, 1e71]\ndensity = 1e-80\nyoung = 1e-60\n";
     EXPECT_THAT([&] { load("giant.toml", giant); },
                 ThrowsMessage<InputError>(HasSubstr("body 'giant': a squared coordinate in contact detection is about 1e+142")));
-    const std::string dwarf = "[[body]]\nname = \"dwarf\"\nshape = \"box\"\nmin = [0.0, 0.0, 0.0]\n"
+    const std::string dwarf = "[contact]\nenabled = true\n[[body]]\nname = \"dwarf\"\nshape = \"box\"\nmin = [0.0, 0.0, 0.0]\n"
                               "max = [1e-71, 1e-71, 1e-71]\ndensity = 1e80\nyoung = 1e60\n";
     EXPECT_THAT([&] { load("dwarf.toml", dwarf); },
                 ThrowsMessage<InputError>(HasSubstr("body 'dwarf': a squared coordinate in contact detection is about")));

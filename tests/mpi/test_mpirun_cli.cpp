@@ -223,8 +223,14 @@ TEST(MpirunRun, ProcessesGivenOtherOptionsOrFilesStopWithTwo)
                                      dir);
     EXPECT_EQ(outcome.exit_code, 2);
     EXPECT_EQ(count(outcome.err, "error: "), 1u) << outcome.err;
-    EXPECT_THAT(outcome.err, HasSubstr("were started with different options or case files"));
+    EXPECT_THAT(outcome.err, HasSubstr("were started with different command lines"));
     EXPECT_FALSE(fs::exists(dir / "out"));
+    // Another subcommand, and a command line one process cannot parse: the same.
+    for (const std::string& other : {"detect " + pile, "run " + pile + " --steps 0"}) {
+        outcome = corocontact_in({{dir, "run " + pile + " --steps 3 --quiet --out " + out}, {dir, other}}, dir);
+        EXPECT_EQ(outcome.exit_code, 2) << other;
+        EXPECT_THAT(outcome.err, HasSubstr("were started with different command lines")) << other;
+    }
     // The same case file on both "nodes", but its mesh file differs: one tet, twice as large.
     const std::string tet_case = "[simulation]\ndt = 0.01\nsteps = 2\n[[body]]\nname = \"tet\"\nmesh = \"tet.node\"\n";
     for (const auto& [node, size] : {std::pair{"node1", "1"}, std::pair{"node2", "2"}}) {
@@ -241,6 +247,15 @@ TEST(MpirunRun, ProcessesGivenOtherOptionsOrFilesStopWithTwo)
     EXPECT_EQ(count(outcome.err, "error: "), 1u) << outcome.err;
     EXPECT_THAT(outcome.err, HasSubstr("loaded different bodies"));
     EXPECT_FALSE(fs::exists(dir / "out"));
+    // The same command line, but the case file differs between the "nodes".
+    std::ofstream(dir / "node2" / "tet.toml") << tet_case << "velocity = [1.0, 0.0, 0.0]\n";
+    outcome = corocontact_in({{dir / "node1", "run tet.toml --quiet --out " + out},
+                              {dir / "node2", "run tet.toml --quiet --out " + out}},
+                             dir);
+    EXPECT_EQ(outcome.exit_code, 2);
+    EXPECT_EQ(count(outcome.err, "error: "), 1u) << outcome.err;
+    EXPECT_THAT(outcome.err, HasSubstr("tet.toml: the processes of this run read different case files"));
+    std::ofstream(dir / "node2" / "tet.toml") << tet_case;
     // The same files on both: it runs.
     fs::copy_file(dir / "node1" / "tet.node", dir / "node2" / "tet.node", fs::copy_options::overwrite_existing);
     outcome = corocontact_in({{dir / "node1", "run tet.toml --quiet --out " + out},

@@ -222,7 +222,7 @@ TEST(Checkpoint, OneProcessOfADistributedRunRestoresOnlyItsBodies)
 
     Loaded second = load(case_file);
     second.scene().bodies.erase(second.scene().bodies.begin()); // this process holds body 1 only
-    std::vector<std::string> warnings;
+    std::vector<BodyWarning> warnings;
     const CheckpointState state =
         read_checkpoint(dir / "parts.checkpoint", second.scene(), {1}, 2, fingerprint, warnings);
     EXPECT_EQ(state.step, 6);

@@ -23,6 +23,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace coro {
@@ -73,9 +74,14 @@ void write_checkpoint(const std::filesystem::path& path, const std::vector<Check
 CheckpointState read_checkpoint(const std::filesystem::path& path, Scene& scene, std::uint64_t fingerprint,
                                 std::vector<std::string>& warnings);
 
+/// A warning about one body of the case: its case index, the text.
+using BodyWarning = std::pair<Index, std::string>;
+
 /// read_checkpoint() into the scene of one process of a distributed run: its bodies are the
 /// case's bodies `body_ids` (ascending) of `case_bodies`; the file is the one-process file.
+/// @param[out] warnings  appended to, for this process's bodies, each with its case index (to
+///                       be merged with the other processes' in case order)
 CheckpointState read_checkpoint(const std::filesystem::path& path, Scene& scene, const std::vector<Index>& body_ids,
-                                Index case_bodies, std::uint64_t fingerprint, std::vector<std::string>& warnings);
+                                Index case_bodies, std::uint64_t fingerprint, std::vector<BodyWarning>& warnings);
 
 } // namespace coro
