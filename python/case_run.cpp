@@ -206,11 +206,10 @@ void CaseRun::check_scales(const CaseSpec& spec, const char* what) const
 
 void CaseRun::check_scales(const CaseSpec& spec, Index b, const BodySpec& body_spec, const std::string& what) const
 {
-    try {
-        check_magnitudes(spec, body_spec, scene().bodies[static_cast<std::size_t>(b)].mesh());
-    } catch (const InputError& error) {
-        throw InputError(what + ": " + error.what());
-    }
+    // The value comes from Python, not from the case file's line: the message starts with its name.
+    BodySpec from_python = body_spec;
+    from_python.location = what;
+    check_magnitudes(spec, from_python, scene().bodies[static_cast<std::size_t>(b)].mesh());
 }
 
 namespace {
@@ -242,14 +241,14 @@ void CaseRun::set_velocities(Index b, CRef<Positions> velocities)
     }
     BodySpec scaled = m_spec.bodies[static_cast<std::size_t>(b)]; // the fastest node as its velocity
     scaled.velocity = largest_row(velocities);
-    check_scales(m_spec, b, scaled, "body '" + target.name() + "': velocities");
+    check_scales(m_spec, b, scaled, "velocities");
     target.velocities() = target.from_input_order(velocities);
     m_simulation->update_contact_response();
 }
 
-void CaseRun::set_fixed(Index b, const std::vector<char>& fixed)
+void CaseRun::check_fixed(Index b, const std::vector<char>& fixed) const
 {
-    Body& target = body(b);
+    const Body& target = scene().bodies[static_cast<std::size_t>(b)];
     // A node in no tet has no mass: released, it would make the system singular.
     for (const Index v : unreferenced_vertices(target.mesh())) {
         const Index node = target.input_node(v);
@@ -257,6 +256,12 @@ void CaseRun::set_fixed(Index b, const std::vector<char>& fixed)
                    "body '" << target.name() << "': fixed[" << node << "] = False: node " << node
                             << " belongs to no tet, expected it to stay fixed");
     }
+}
+
+void CaseRun::set_fixed(Index b, const std::vector<char>& fixed)
+{
+    check_fixed(b, fixed);
+    Body& target = body(b);
     std::vector<char> internal(fixed.size());
     for (Index v = 0; v < target.num_vertices(); ++v)
         internal[static_cast<std::size_t>(v)] = fixed[static_cast<std::size_t>(target.input_node(v))];
@@ -264,9 +269,9 @@ void CaseRun::set_fixed(Index b, const std::vector<char>& fixed)
     m_simulation->update_contact_response();
 }
 
-void CaseRun::set_loads(Index b, CRef<Positions> loads)
+void CaseRun::check_loads(Index b, CRef<Positions> loads) const
 {
-    Body& target = body(b);
+    const Body& target = scene().bodies[static_cast<std::size_t>(b)];
     const Index bad = first_non_finite_row(loads);
     CORO_CHECK(bad < 0, InputError,
                "body '" << target.name() << "': loads[" << bad << "] = " << format_row(loads.row(bad))
@@ -275,18 +280,28 @@ void CaseRun::set_loads(Index b, CRef<Positions> loads)
     BodySpec scaled = m_spec.bodies[static_cast<std::size_t>(b)];
     scaled.loads.assign(1, BoxLoad{});
     scaled.loads[0].force = largest_row(loads) * static_cast<double>(target.num_vertices());
-    check_scales(m_spec, b, scaled, "body '" + target.name() + "': loads");
+    check_scales(m_spec, b, scaled, "loads");
+}
+
+void CaseRun::set_loads(Index b, CRef<Positions> loads)
+{
+    check_loads(b, loads);
+    Body& target = body(b);
     target.load_forces() = target.from_input_order(loads);
 }
 
-std::optional<std::string> CaseRun::loads_on_fixed_nodes(Index b) const
+std::optional<std::string> CaseRun::loads_on_fixed_nodes(Index b, const Positions* loads,
+                                                         const std::vector<char>* fixed) const
 {
     const Body& target = scene().bodies[static_cast<std::size_t>(b)];
+    const VecX forces = loads ? target.from_input_order(*loads) : target.load_forces();
     Vec3 lost = Vec3::Zero(), total = Vec3::Zero();
     for (Index v = 0; v < target.num_vertices(); ++v) {
-        total += target.load_forces().segment<3>(3 * v);
-        if (target.fixed()[static_cast<std::size_t>(v)] != 0)
-            lost += target.load_forces().segment<3>(3 * v);
+        total += forces.segment<3>(3 * v);
+        const bool held = fixed ? (*fixed)[static_cast<std::size_t>(target.input_node(v))] != 0
+                                : target.fixed()[static_cast<std::size_t>(v)] != 0;
+        if (held)
+            lost += forces.segment<3>(3 * v);
     }
     if (!(lost.stableNorm() > 1e-12 * total.stableNorm()))
         return std::nullopt;

@@ -88,11 +88,17 @@ public:
     void set_velocities(Index body, CRef<Positions> velocities);
     /// @param[in] fixed  #V flags, input node order; nodes in no tet must stay fixed
     void set_fixed(Index body, const std::vector<char>& fixed);
+    /// set_fixed()'s checks alone.
+    void check_fixed(Index body, const std::vector<char>& fixed) const;
     /// @param[in] loads  #V×3 constant nodal forces [N], input node order
     void set_loads(Index body, CRef<Positions> loads);
+    /// set_loads()'s checks alone.
+    void check_loads(Index body, CRef<Positions> loads) const;
     /// The warning the scene loader gives for a body whose loads fall on fixed nodes (there they
-    /// have no effect), or none.
-    std::optional<std::string> loads_on_fixed_nodes(Index body) const;
+    /// have no effect), or none: for its loads and fixed nodes, or for `loads` and `fixed`
+    /// (input order) where given, to warn before a change is made.
+    std::optional<std::string> loads_on_fixed_nodes(Index body, const Positions* loads = nullptr,
+                                                    const std::vector<char>* fixed = nullptr) const;
     /// @param[in] gravity  [m/s²]
     void set_gravity(const Vec3& gravity);
     /// [contact] stiffness (> 0), damping (≥ 0), friction (in [0, MAX_FRICTION]).
@@ -104,7 +110,8 @@ public:
 private:
     Body& body(Index b);
     /// The load-time scale check (io/magnitudes.hpp) of every body, or of body b with
-    /// `body_spec`, under `spec`; InputError prefixed with `what` (the value being set).
+    /// `body_spec`, under `spec`; its InputError starts with `what` (the value being set), not
+    /// with a line of the case file.
     void check_scales(const CaseSpec& spec, const char* what) const;
     void check_scales(const CaseSpec& spec, Index b, const BodySpec& body_spec, const std::string& what) const;
     void check_contact_applies(const char* key) const;

@@ -105,13 +105,13 @@ py::array to_numpy(const std::vector<std::string>& values)
     return py::module_::import("numpy").attr("array")(list, "dtype"_a = "str");
 }
 
-py::array read_only(py::array array)
+py::array read_only(const py::array& array)
 {
-    array.attr("flags").attr("writeable") = false;
-    return array;
+    // Over a bytes object, which is immutable: numpy refuses to make the array, or any array
+    // it derives from or that derives from it, writable again.
+    const py::bytes bytes(static_cast<const char*>(array.data()), static_cast<std::size_t>(array.nbytes()));
+    return py::module_::import("numpy").attr("frombuffer")(bytes, array.dtype()).attr("reshape")(array.attr("shape"));
 }
-
-py::object read_only_view(const py::object& array) { return array.attr("view")(); }
 
 Positions rows_from(const py::handle& object, Index rows, const std::string& what)
 {

@@ -26,11 +26,9 @@ py::array_t<double> to_numpy(const VecX& values);
 py::array_t<std::int64_t> to_numpy(const std::vector<Index>& values);
 /// A 1-D numpy str array.
 py::array to_numpy(const std::vector<std::string>& values);
-/// `array`, marked read-only (for arrays cached and handed out again: hand out views of it,
-/// read_only_view(), since numpy lets the owner of an array's data make it writable again).
-py::array read_only(py::array array);
-/// A new view of the read-only `array`: numpy refuses to make it writable.
-py::object read_only_view(const py::object& array);
+/// A copy of the C-contiguous `array` that numpy refuses to make writable (for arrays cached
+/// and handed out again).
+py::array read_only(const py::array& array);
 
 /// An N×3 array of numbers from any array-like: shape (rows, 3), or (3,) for the same row
 /// everywhere.

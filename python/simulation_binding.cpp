@@ -110,13 +110,13 @@ public:
     {
         if (!m_rest_positions)
             m_rest_positions = read_only(to_numpy(body().to_input_order(body().fem().rest_dofs())));
-        return read_only_view(m_rest_positions);
+        return m_rest_positions;
     }
     py::object tets()
     {
         if (!m_tets)
             m_tets = read_only(to_numpy(body().input_tets()));
-        return read_only_view(m_tets);
+        return m_tets;
     }
     py::object surface_faces()
     {
@@ -124,7 +124,7 @@ public:
             const TetMesh input{body().to_input_order(body().fem().rest_dofs()), body().input_tets()};
             m_faces = read_only(to_numpy(boundary_faces(input)));
         }
-        return read_only_view(m_faces);
+        return m_faces;
     }
     py::object masses()
     {
@@ -135,7 +135,7 @@ public:
                 masses[body().input_node(v)] = internal[v];
             m_masses = read_only(to_numpy(masses));
         }
-        return read_only_view(m_masses);
+        return m_masses;
     }
 
 private:
@@ -151,28 +151,13 @@ struct SimulationObject : ZeroedStorage {
     py::tuple bodies;
 };
 
-/// Warns when the loads of the body fall on fixed nodes; `undo` takes back the change that made
-/// it so when a warnings filter turns the warning into an error (a refused value changes nothing).
-template <class Undo>
-void warn_about_loads_on_fixed_nodes(BodyView& view, Undo undo)
+/// Warns, before a change of the body's loads or fixed nodes (input order, null: unchanged),
+/// when the loads would fall on fixed nodes; a warnings filter that makes the warning an error
+/// stops the change before it is made.
+void warn_about_loads_on_fixed_nodes(BodyView& view, const Positions* loads, const std::vector<char>* fixed)
 {
-    if (const auto warning = view.run().loads_on_fixed_nodes(view.index())) {
-        try {
-            warn({*warning});
-        } catch (...) {
-            undo();
-            throw;
-        }
-    }
-}
-
-/// The body's fixed flags in input node order.
-std::vector<char> input_order_fixed(const Body& body)
-{
-    std::vector<char> fixed(body.fixed().size());
-    for (Index v = 0; v < body.num_vertices(); ++v)
-        fixed[static_cast<std::size_t>(body.input_node(v))] = body.fixed()[static_cast<std::size_t>(v)];
-    return fixed;
+    if (const auto warning = view.run().loads_on_fixed_nodes(view.index(), loads, fixed))
+        warn({*warning});
 }
 
 const char* analysis_name(Analysis analysis) { return analysis == Analysis::STATIC ? "static" : "dynamic"; }
@@ -230,9 +215,10 @@ every node) to change them; fixed nodes must get 0.)doc")
                 return fixed;
             },
             [](BodyView& self, const py::handle& value) {
-                const std::vector<char> before = input_order_fixed(self.body());
-                self.run().set_fixed(self.index(), flags_from(value, self.body().num_vertices(), self.what("fixed")));
-                warn_about_loads_on_fixed_nodes(self, [&] { self.run().set_fixed(self.index(), before); });
+                const std::vector<char> fixed = flags_from(value, self.body().num_vertices(), self.what("fixed"));
+                self.run().check_fixed(self.index(), fixed);
+                warn_about_loads_on_fixed_nodes(self, nullptr, &fixed);
+                self.run().set_fixed(self.index(), fixed);
             },
             R"doc(N bool, True for a node held in place (a copy). Assign an N-array to change it: nodes
 fixed from now on stay where they are (velocity 0); released ones move from the next step.)doc")
@@ -240,9 +226,10 @@ fixed from now on stay where they are (velocity 0); released ones move from the 
             "loads",
             [](const BodyView& self) { return to_numpy(self.body().to_input_order(self.body().load_forces())); },
             [](BodyView& self, const py::handle& value) {
-                const Positions before = self.body().to_input_order(self.body().load_forces());
-                self.run().set_loads(self.index(), rows_from(value, self.body().num_vertices(), self.what("loads")));
-                warn_about_loads_on_fixed_nodes(self, [&] { self.run().set_loads(self.index(), before); });
+                const Positions loads = rows_from(value, self.body().num_vertices(), self.what("loads"));
+                self.run().check_loads(self.index(), loads);
+                warn_about_loads_on_fixed_nodes(self, &loads, nullptr);
+                self.run().set_loads(self.index(), loads);
             },
             R"doc(constant external node forces, N×3 float64 [N] (a copy; the case's [[body.load]] boxes
 split over their nodes). Assign an N×3 array to change them. Gravity is separate
