@@ -213,6 +213,27 @@ TEST(MpirunRun, ARestartWarnsAboutEveryBodyAsOneProcessDoes)
     }
 }
 
+TEST(MpirunRun, ARestartCountsContactsAcrossProcessesOverItsOwnDetections)
+{
+    // Restarted one step before the end, the mean is that of the last detections, close to the
+    // uninterrupted run's, not their count spread over the first run's detections too.
+    const fs::path dir = coro::test::scratch_dir("mpirun_restart_cross");
+    const std::string pile = DATA + "/touching_pile.toml";
+    const fs::path whole = dir / "whole", restarted = dir / "restarted";
+    ASSERT_EQ(corocontact(2, "run " + pile + " --steps 20 --quiet --out " + whole.string(), dir).exit_code, 0);
+    ASSERT_EQ(corocontact(2, "run " + pile + " --steps 19 --checkpoint-every 19 --quiet --out " + restarted.string(), dir)
+                  .exit_code,
+              0);
+    const Outcome outcome = corocontact(2, "run " + pile + " --steps 20 --quiet --restart " + restarted.string() +
+                                               "/touching_pile.checkpoint --out " + restarted.string(), dir);
+    ASSERT_EQ(outcome.exit_code, 0) << outcome.err;
+    const double all = json_number(slurp(whole / "touching_pile.summary.json"), "cross_rank_contacts_mean");
+    const double last = json_number(slurp(restarted / "touching_pile.summary.json"), "cross_rank_contacts_mean");
+    ASSERT_GT(all, 1.0) << "the pile must have contacts across the processes";
+    EXPECT_GT(last, 0.5 * all);
+    EXPECT_LT(last, 2.0 * all);
+}
+
 TEST(MpirunRun, ProcessesGivenOtherOptionsOrFilesStopWithTwo)
 {
     const fs::path dir = coro::test::scratch_dir("mpirun_mismatch");
