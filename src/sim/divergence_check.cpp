@@ -127,20 +127,21 @@ void DivergenceCheck::check(const std::vector<Body>& bodies)
     for (std::size_t b = 0; b < bodies.size(); ++b) {
         const Body& body = bodies[b];
         const DivergenceFinding& finding = m_findings[b];
-        if (finding.node >= 0)
-            CORO_THROW(NumericalError, "body '" << body.name() << "': position of node " << finding.node
-                                                << " (mesh file order) is " << finding.volume_ratio);
-        if (finding.element < 0)
+        if (!finding.found())
             continue;
+        std::ostringstream message;
+        message << "body '" << body.name() << "': ";
         const double j = finding.volume_ratio;
-        if (j <= m_limits.min_volume_ratio)
-            CORO_THROW(NumericalError, "body '" << body.name() << "': element " << finding.element
-                                                << " (mesh file order) inverted beyond recovery: det F = " << j
-                                                << " (limit " << m_limits.min_volume_ratio << ")");
-        CORO_THROW(NumericalError, "body '" << body.name() << "': element " << finding.element
-                                            << " (mesh file order) "
-                                            << (std::isfinite(j) ? "blown up" : "degenerate") << ": det F = " << j
-                                            << " (limit " << m_limits.max_volume_ratio << ")");
+        if (finding.node >= 0)
+            message << "position of node " << finding.node << " (mesh file order) is " << j;
+        else if (j <= m_limits.min_volume_ratio)
+            message << "element " << finding.element << " (mesh file order) inverted beyond recovery: det F = " << j
+                    << " (limit " << m_limits.min_volume_ratio << ")";
+        else
+            message << "element " << finding.element << " (mesh file order) "
+                    << (std::isfinite(j) ? "blown up" : "degenerate") << ": det F = " << j << " (limit "
+                    << m_limits.max_volume_ratio << ")";
+        throw NumericalError(detail::with_source_location(message.str(), __FILE__, __LINE__), static_cast<Index>(b));
     }
 }
 

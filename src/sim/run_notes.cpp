@@ -29,7 +29,7 @@ std::optional<std::string> iteration_cap_warning(const RunSummary& summary, cons
     std::ostringstream out;
     out << "warning: " << summary.solves_not_converged << " of " << summary.solves
         << " PCG solves stopped at solver.max_iterations = " << solver.max_iterations
-        << " before reaching solver.tolerance = " << tolerance << " (mean relative residual " << residual
+        << " before reaching solver.tolerance = " << tolerance << " (mean relative residual of all solves " << residual
         << "), so the results depend on the cap. Raise max_iterations";
     if (solver.preconditioner == PcgPreconditioner::JACOBI)
         out << ", use preconditioner = \"block_jacobi\"";

@@ -6,6 +6,7 @@
 #include <tbb/parallel_for.h>
 
 #include <cmath>
+#include <sstream>
 
 namespace coro {
 
@@ -122,9 +123,10 @@ void SceneSystem::report_non_finite(const VecX& values, const char* what) const
         Index first = 3 * m_matrix.chunks().offsets[at(c)];
         while (std::isfinite(values[first]))
             ++first;
-        CORO_THROW(NumericalError, "body '" << body.name() << "': " << what << " at node "
-                                            << body.input_node(first / 3 - offset(b)) << " (mesh file order) is "
-                                            << values[first]);
+        std::ostringstream message;
+        message << "body '" << body.name() << "': " << what << " at node " << body.input_node(first / 3 - offset(b))
+                << " (mesh file order) is " << values[first];
+        throw NumericalError(detail::with_source_location(message.str(), __FILE__, __LINE__), b);
     }
 }
 

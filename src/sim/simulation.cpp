@@ -140,7 +140,27 @@ Simulation::~Simulation() = default;
 
 void Simulation::collectively(FunctionRef<void()> work)
 {
-    run_collectively(m_ranks ? &m_ranks->communicator : nullptr, work);
+    if (!m_ranks) {
+        work();
+        return;
+    }
+    // A failure in a body: of all processes', the one in the first body in case order, as one
+    // process meets it first.
+    Index body = -1;
+    std::string message;
+    run_collectively(&m_ranks->communicator, [&] {
+        try {
+            work();
+        } catch (const NumericalError& error) {
+            if (error.body() < 0)
+                throw;
+            body = error.body();
+            message = error.what();
+        }
+    });
+    message = first_over_processes(body, std::move(message));
+    if (!message.empty())
+        throw NumericalError(message);
 }
 
 void Simulation::detect(RunSummary& summary)
@@ -281,30 +301,32 @@ void Simulation::start(Index resume_step, const RunSummary& resume)
     m_totals.wall_s += seconds_since(start);
 }
 
-std::string Simulation::first_non_finite() const
+std::string Simulation::first_over_processes(Index body, std::string text) const
 {
-    Index first = -1; // case index of the first body with a non-finite value here
-    std::string where;
-    for (std::size_t b = 0; b < m_scene.bodies.size() && where.empty(); ++b) {
-        where = locate_non_finite(m_scene.bodies[b]);
-        first = where.empty() ? -1 : m_ranks ? m_ranks->body_ids[b] : static_cast<Index>(b);
-    }
     if (!m_ranks)
-        return where;
-    // The first over every process's bodies, so that the message is the one of one process.
-    std::vector<char> mine(sizeof first + where.size());
-    std::memcpy(mine.data(), &first, sizeof first);
-    std::copy(where.begin(), where.end(), mine.begin() + sizeof first);
+        return text;
+    const Index case_body = body < 0 ? -1 : m_ranks->body_ids[static_cast<std::size_t>(body)];
+    std::vector<char> mine(sizeof case_body + text.size());
+    std::memcpy(mine.data(), &case_body, sizeof case_body);
+    std::copy(text.begin(), text.end(), mine.begin() + sizeof case_body);
     Index best = -1;
     for (const std::vector<char>& theirs : m_ranks->communicator.all_gather(mine)) {
-        Index body;
-        std::memcpy(&body, theirs.data(), sizeof body);
-        if (body >= 0 && (best < 0 || body < best)) {
-            best = body;
-            where.assign(theirs.begin() + sizeof body, theirs.end());
+        Index theirs_body;
+        std::memcpy(&theirs_body, theirs.data(), sizeof theirs_body);
+        if (theirs_body >= 0 && (best < 0 || theirs_body < best)) {
+            best = theirs_body;
+            text.assign(theirs.begin() + sizeof theirs_body, theirs.end());
         }
     }
-    return where;
+    return text;
+}
+
+std::string Simulation::first_non_finite() const
+{
+    for (std::size_t b = 0; b < m_scene.bodies.size(); ++b)
+        if (std::string where = locate_non_finite(m_scene.bodies[b]); !where.empty())
+            return first_over_processes(static_cast<Index>(b), std::move(where));
+    return first_over_processes(-1, {});
 }
 
 void Simulation::step()

@@ -361,13 +361,23 @@ TEST(DistributedScene, ANonFiniteValueIsNamedAsInOneProcess)
             loaded.scene.bodies[b].velocities().setConstant(std::numeric_limits<double>::quiet_NaN());
     Simulation simulation(loaded.scene, spec, &distribution);
     simulation.start();
-    const std::string expected = "; first non-finite value: body 'box0_1': velocity of node 0 (mesh file order) is nan";
-    EXPECT_THAT([&] { simulation.step(); }, ::testing::ThrowsMessage<NumericalError>(::testing::EndsWith(expected)));
+    const auto message_of_step = [](Simulation& run) {
+        try {
+            run.step();
+        } catch (const NumericalError& error) {
+            return std::string(error.what());
+        }
+        return std::string("no NumericalError");
+    };
+    const std::string distributed = message_of_step(simulation);
 
     LoadedScene alone = load_scene(spec);
     for (const Index b : {1, 5})
         alone.scene.bodies[at(b)].velocities().setConstant(std::numeric_limits<double>::quiet_NaN());
     Simulation one(alone.scene, spec);
     one.start();
-    EXPECT_THAT([&] { one.step(); }, ::testing::ThrowsMessage<NumericalError>(::testing::EndsWith(expected)));
+    const std::string expected = message_of_step(one);
+    EXPECT_THAT(expected, ::testing::EndsWith("; first non-finite value: body 'box0_1': velocity of node 0 (mesh file "
+                                              "order) is nan"));
+    EXPECT_EQ(distributed, expected);
 }

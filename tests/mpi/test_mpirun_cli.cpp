@@ -313,6 +313,25 @@ TEST(MpirunRun, DivergenceOnOneProcessStopsAllWithThree)
     EXPECT_THAT(outcome.err, HasSubstr("body 'soft': element"));
 }
 
+TEST(MpirunRun, TheFirstDivergingBodyInCaseOrderIsNamedAsByOneProcess)
+{
+    const fs::path dir = coro::test::scratch_dir("mpirun_two_diverging");
+    std::string alone;
+    for (const int ranks : {0, 2, 3}) {
+        const Outcome outcome = corocontact(ranks, "run " + DATA + "/two_diverging.toml --quiet --out " +
+                                                       (dir / std::to_string(ranks)).string(), dir);
+        EXPECT_EQ(outcome.exit_code, 3);
+        const std::vector<std::string> errors = lines_with(outcome.err, "error: ");
+        ASSERT_EQ(errors.size(), 1u) << outcome.err;
+        if (ranks == 0) {
+            alone = errors[0];
+            EXPECT_THAT(alone, HasSubstr("step 2 (t = 0.02): body 'soft_a': element"));
+        } else {
+            EXPECT_EQ(errors[0], alone) << ranks << " processes";
+        }
+    }
+}
+
 TEST(MpirunRun, CheckpointOfTwoProcessesContinuesOnThreeAndAlone)
 {
     const fs::path dir = coro::test::scratch_dir("mpirun_restart");

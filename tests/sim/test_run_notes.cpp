@@ -32,7 +32,7 @@ TEST(IterationCapWarning, NamesCountResidualAndRemedies)
     ASSERT_TRUE(warning.has_value());
     EXPECT_THAT(*warning, HasSubstr("289 of 353 PCG solves stopped at solver.max_iterations = 10"));
     EXPECT_THAT(*warning, HasSubstr("solver.tolerance = 1e-06"));
-    EXPECT_THAT(*warning, HasSubstr("mean relative residual 9.70e-01"));
+    EXPECT_THAT(*warning, HasSubstr("mean relative residual of all solves 9.70e-01"));
     EXPECT_THAT(*warning, HasSubstr("Raise max_iterations"));
     EXPECT_THAT(*warning, HasSubstr("tolerance = 0"));
     EXPECT_THAT(*warning, ::testing::Not(HasSubstr("block_jacobi")));

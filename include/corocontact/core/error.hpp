@@ -8,6 +8,7 @@
 /// CORO_CHECK and CORO_THROW can end in their source location (` [case_reader.cpp:353]`):
 /// see set_source_locations_shown().
 
+#include <cstdint>
 #include <sstream>
 #include <stdexcept>
 #include <string>
@@ -33,6 +34,14 @@ public:
 class NumericalError : public std::runtime_error {
 public:
     using std::runtime_error::runtime_error;
+    /// A failure found in one body: `body` indexes the bodies of the scene it was found in (so
+    /// that of several processes' failures the one of the first body in case order is told).
+    NumericalError(const std::string& message, std::int32_t body) : std::runtime_error(message), m_body(body) {}
+    /// The body of the failure, −1 when it concerns none.
+    std::int32_t body() const { return m_body; }
+
+private:
+    std::int32_t m_body = -1;
 };
 
 /// Whether the messages of CORO_CHECK / CORO_THROW end in ` [file.cpp:line]`. Initially on

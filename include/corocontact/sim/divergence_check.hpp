@@ -53,7 +53,7 @@ public:
     DivergenceFinding find(const std::vector<Body>& bodies, std::size_t b) const;
 
     /// Checks every body (in parallel) and throws for the first, in body order, that diverged.
-    /// @throws NumericalError "body 'left': element 123 (mesh file order) inverted beyond
+    /// @throws NumericalError about that body (NumericalError::body()): "body 'left': element 123 (mesh file order) inverted beyond
     ///         recovery: det F = -3.8 (limit -3)", "... blown up: det F = 41 (limit 30)", or
     ///         "body 'left': position of node 7 (mesh file order) is nan"
     void check(const std::vector<Body>& bodies);

@@ -162,13 +162,18 @@ private:
     void detect(RunSummary& summary);
     void dynamic_step();
     void static_step(Index load_step);
-    /// Runs `work` (no communication in it) so that a failure on any process throws on all.
+    /// Runs `work` (no communication in it) so that a failure on any process throws on all; of
+    /// NumericalErrors about a body, the one about the first body in case order.
     void collectively(FunctionRef<void()> work);
     /// The counters of all processes (collective when distributed); *_mean fields still sums.
     RunSummary totals() const;
-    /// locate_non_finite() of the first body, in case order, with a non-finite value on any
-    /// process (collective when distributed), or "".
+    /// Of the `text`s about a body of each process (`body`: index into this process's bodies,
+    /// −1 for none), the one about the first body in case order, as one process finds it first
+    /// (collective when distributed), or "".
+    std::string first_over_processes(Index body, std::string text) const;
+    /// locate_non_finite() of the first body with a non-finite value, in case order, or "".
     std::string first_non_finite() const;
+
 
     Scene& m_scene;
     const CaseSpec& m_spec;
