@@ -296,7 +296,7 @@ CheckpointState read_checkpoint(const fs::path& path, Scene& scene, const std::v
             const auto bad = std::find_if(nodes.begin(), nodes.end(), [](double x) { return !std::isfinite(x); });
             CORO_CHECK(bad == nodes.end(), InputError,
                        where << ": corrupt checkpoint: body '" << body.name() << "': node "
-                             << (bad - nodes.begin()) / 3 << " has the non-finite "
+                             << (bad - nodes.begin()) / 3 << " (mesh file order) has the non-finite "
                              << (values == &body.positions() ? "position" : "velocity") << " component " << *bad);
             for (Index v = 0; v < n; ++v)
                 for (int d = 0; d < 3; ++d)

@@ -61,12 +61,14 @@ long summary_steps(const fs::path& summary)
 }
 
 /// Runs the command under bash with a file-size limit of `kib` KiB: a write failure anywhere, also
-/// as root. SIGXFSZ keeps its default action (killing the process): the command ignores it, so
-/// that the write fails with EFBIG, as on a full disk.
+/// as root. SIGXFSZ is given its default action (killing the process) here, for the command to
+/// inherit whatever the test runner set: the command ignores it itself, so that the write fails
+/// with EFBIG, as on a full disk.
 Outcome run_with_file_size_limit(long kib, const std::string& arguments, const fs::path& dir)
 {
     const fs::path out = dir / "stdout.txt", err = dir / "stderr.txt";
-    const std::string command = "bash -c \"trap - XFSZ; ulimit -f " + std::to_string(kib) + "; exec " +
+    std::signal(SIGXFSZ, SIG_DFL); // an ignored signal stays ignored across exec: bash could not undo it
+    const std::string command = "bash -c \"ulimit -f " + std::to_string(kib) + "; exec " +
                                 CORO_CLI_PATH + " " + arguments + "\" > " + out.string() + " 2> " + err.string() +
                                 " < /dev/null";
     const int status = std::system(command.c_str());

@@ -190,8 +190,8 @@ TEST(Checkpoint, RejectsTruncatedForeignAndOtherCaseFiles)
     with_nan.scene().bodies[1].velocities().setConstant(std::numeric_limits<double>::quiet_NaN());
     write_checkpoint(dir / "nan.checkpoint", with_nan.scene(), {3, {}, {}}, fingerprint);
     EXPECT_THAT([&] { read(dir / "nan.checkpoint", fingerprint); },
-                ThrowsMessage<InputError>(HasSubstr("nan.checkpoint: corrupt checkpoint: body 'right': node 0 has the "
-                                                    "non-finite velocity component nan")));
+                ThrowsMessage<InputError>(HasSubstr("nan.checkpoint: corrupt checkpoint: body 'right': node 0 (mesh file order) "
+                                                    "has the non-finite velocity component nan")));
 
     // Same case file text but one body fewer: the body table must not match.
     std::string one_body = CASE;
